@@ -1,0 +1,83 @@
+//! The one error type of the crate. Every variant carries enough context (field, valid range,
+//! file, step, log tail) for a user to fix the cause without reading code.
+
+use std::path::PathBuf;
+
+/// All errors the harness reports. `main` maps any of them to exit code 2.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A case or command-line value outside its valid range.
+    #[error("invalid value for `{field}`: {value} (valid: {valid})")]
+    Invalid {
+        field: String,
+        value: String,
+        valid: String,
+    },
+    /// A name (case, model, preset) that is not known; lists the valid ones.
+    #[error("unknown {what} `{name}`; valid: {valid}")]
+    Unknown {
+        what: &'static str,
+        name: String,
+        valid: String,
+    },
+    /// A case file that is not valid TOML or has unknown/missing fields.
+    #[error("cannot read case file {path}: {msg}")]
+    CaseFile { path: PathBuf, msg: String },
+    /// The LIGGGHTS binary could not be found.
+    #[error(
+        "LIGGGHTS binary `{binary}` not found. Install it with\n  \
+         apt-get update && apt-get install -y liggghts libliggghts-dev\n\
+         or pass --liggghts PATH; `verify contact --reference` compares against stored \
+         LIGGGHTS outputs without it"
+    )]
+    LiggghtsMissing { binary: String },
+    /// LIGGGHTS ran but failed (non-zero exit, timeout, or missing outputs).
+    #[error("LIGGGHTS run failed: {reason}\n--- tail of {log} ---\n{tail}")]
+    LiggghtsFailed {
+        reason: String,
+        log: PathBuf,
+        tail: String,
+    },
+    /// A LIGGGHTS output file that could not be parsed.
+    #[error("cannot parse LIGGGHTS output {path}: {msg}")]
+    Parse { path: PathBuf, msg: String },
+    /// The native solver reached a non-finite or unsupported state.
+    #[error("native solver stopped at step {step}: {msg}")]
+    Solver { step: u64, msg: String },
+    /// Stored reference data missing or inconsistent.
+    #[error("reference data: {0}")]
+    Reference(String),
+    #[error("I/O error on {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("CSV error on {path}: {msg}")]
+    Csv { path: PathBuf, msg: String },
+    #[error("JSON error: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// Shorthand for [`Error::Invalid`].
+    pub fn invalid(
+        field: impl Into<String>,
+        value: impl ToString,
+        valid: impl Into<String>,
+    ) -> Self {
+        Error::Invalid {
+            field: field.into(),
+            value: value.to_string(),
+            valid: valid.into(),
+        }
+    }
+    /// Wraps an I/O error with the path it happened on.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

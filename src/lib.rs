@@ -1,0 +1,21 @@
+//! Native DEM solver and cross-validation harness against LIGGGHTS 3.8.0.
+//!
+//! Data flows one way:
+//! `case.toml -> Case -> {deck -> liggghts -> Series, solver -> Series} -> compare -> report`.
+//! The comparator never knows which code produced a series.
+
+// Kernels index x/y/z components explicitly, as the LIGGGHTS code they mirror does.
+#![allow(clippy::needless_range_loop)]
+
+pub mod cli;
+pub mod compare;
+pub mod deck;
+pub mod error;
+pub mod fsutil;
+pub mod liggghts;
+pub mod report;
+pub mod series;
+pub mod solver;
+pub mod spec;
+
+pub use error::{Error, Result};

@@ -1,0 +1,230 @@
+//! The one place that spawns LIGGGHTS: writes a deck into a temporary directory, runs
+//! `liggghts -in in.deck -log log.liggghts` with a timeout, and parses its dumps back into
+//! the same [`Frame`]s the native solver produces. A missing binary says how to install it;
+//! a failed run shows the tail of its log.
+
+use crate::deck::{Deck, ATOM_DUMP, CONTACT_DUMP, DECK_NAME};
+use crate::error::{Error, Result};
+use crate::fsutil::{read_to_string, tail};
+use crate::solver::contact::ContactHistory;
+use crate::solver::{AtomState, Frame};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Name of the LIGGGHTS log file in a run directory.
+pub const LOG_NAME: &str = "log.liggghts";
+
+/// A located LIGGGHTS binary.
+#[derive(Clone, Debug)]
+pub struct Liggghts {
+    pub binary: PathBuf,
+    pub timeout: Duration,
+}
+
+/// Finds `name` on PATH (or accepts an explicit path that exists).
+fn which(name: &Path) -> Option<PathBuf> {
+    if name.components().count() > 1 {
+        return name.is_file().then(|| name.to_path_buf());
+    }
+    std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|d| d.join(name))
+            .find(|p| p.is_file())
+    })
+}
+
+impl Liggghts {
+    /// Locates the binary (`liggghts` on PATH unless given).
+    pub fn locate(binary: Option<&Path>, timeout: Duration) -> Result<Self> {
+        let name = binary.unwrap_or(Path::new("liggghts"));
+        let binary = which(name).ok_or_else(|| Error::LiggghtsMissing {
+            binary: name.display().to_string(),
+        })?;
+        Ok(Liggghts { binary, timeout })
+    }
+
+    /// Debian package version of LIGGGHTS if dpkg knows it, else the binary path.
+    pub fn version(&self) -> String {
+        Command::new("dpkg-query")
+            .args(["-W", "-f=${Version}", "liggghts"])
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| {
+                format!(
+                    "LIGGGHTS-PUBLIC 3.8.0 (Debian liggghts {})",
+                    String::from_utf8_lossy(&o.stdout)
+                )
+            })
+            .unwrap_or_else(|| format!("LIGGGHTS at {}", self.binary.display()))
+    }
+
+    /// Writes `deck` into `dir` and runs it there. On failure returns the log tail.
+    pub fn run(&self, deck: &Deck, dir: &Path) -> Result<()> {
+        for (name, text) in &deck.files {
+            let p = dir.join(name);
+            std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
+        }
+        let screen = dir.join("screen.txt");
+        let out = std::fs::File::create(&screen).map_err(|e| Error::io(&screen, e))?;
+        let err = out.try_clone().map_err(|e| Error::io(&screen, e))?;
+        // stdout is redirected to a file: `-screen none` crashes LIGGGHTS 3.8 with STL meshes.
+        let mut child = Command::new(&self.binary)
+            .args(["-in", DECK_NAME, "-log", LOG_NAME])
+            .current_dir(dir)
+            .stdin(Stdio::null())
+            .stdout(out)
+            .stderr(err)
+            .spawn()
+            .map_err(|e| Error::io(&self.binary, e))?;
+        let start = Instant::now();
+        let status = loop {
+            if let Some(s) = child.try_wait().map_err(|e| Error::io(&self.binary, e))? {
+                break s;
+            }
+            if start.elapsed() > self.timeout {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(self.failure(dir, format!("timed out after {:?}", self.timeout)));
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let log = std::fs::read_to_string(dir.join(LOG_NAME)).unwrap_or_default();
+        if !status.success() || log.contains("ERROR") {
+            return Err(self.failure(dir, format!("exit status {status}")));
+        }
+        Ok(())
+    }
+
+    fn failure(&self, dir: &Path, reason: String) -> Error {
+        let log = dir.join(LOG_NAME);
+        let text = std::fs::read_to_string(&log)
+            .or_else(|_| std::fs::read_to_string(dir.join("screen.txt")))
+            .unwrap_or_else(|_| "(no log written)".into());
+        Error::LiggghtsFailed {
+            reason,
+            log,
+            tail: tail(&text, 25),
+        }
+    }
+}
+
+/// One `ITEM: TIMESTEP` block of a LAMMPS text dump: step and the data rows.
+fn dump_blocks(path: &Path) -> Result<Vec<(u64, Vec<Vec<f64>>)>> {
+    let text = read_to_string(path)?;
+    let bad = |msg: String| Error::Parse {
+        path: path.to_path_buf(),
+        msg,
+    };
+    let mut blocks = Vec::new();
+    let mut lines = text.lines().enumerate().peekable();
+    while let Some((ln, line)) = lines.next() {
+        if line.trim() != "ITEM: TIMESTEP" {
+            return Err(bad(format!(
+                "line {}: expected `ITEM: TIMESTEP`, got {line:?}",
+                ln + 1
+            )));
+        }
+        let step: u64 = lines
+            .next()
+            .and_then(|(_, l)| l.trim().parse().ok())
+            .ok_or_else(|| bad(format!("line {}: missing step", ln + 2)))?;
+        let mut count = None;
+        // Header items until the data item (ATOMS or ENTRIES).
+        loop {
+            let (ln, l) = lines.next().ok_or_else(|| bad("truncated header".into()))?;
+            if l.starts_with("ITEM: NUMBER OF") {
+                let n: usize = lines
+                    .next()
+                    .and_then(|(_, l)| l.trim().parse().ok())
+                    .ok_or_else(|| bad(format!("line {}: missing count", ln + 2)))?;
+                count = Some(n);
+            } else if l.starts_with("ITEM: ATOMS") || l.starts_with("ITEM: ENTRIES") {
+                break;
+            }
+        }
+        let n = count.ok_or_else(|| bad(format!("step {step}: no count")))?;
+        let mut rows = Vec::with_capacity(n);
+        for _ in 0..n {
+            let (ln, l) = lines
+                .next()
+                .ok_or_else(|| bad(format!("step {step}: truncated data")))?;
+            let row: std::result::Result<Vec<f64>, _> =
+                l.split_whitespace().map(str::parse).collect();
+            rows.push(row.map_err(|e| bad(format!("line {}: {e}", ln + 1)))?);
+        }
+        blocks.push((step, rows));
+    }
+    Ok(blocks)
+}
+
+/// Parses `atoms.dump` and `contact.dump` of a finished contact run into frames.
+/// Contact history is oriented as stored with atom 1 as `i`: if LIGGGHTS listed the pair
+/// as (2, 1), the history (all slots are `newtonflag` 1) is negated.
+pub fn read_contact_frames(dir: &Path, n_hist: usize, is_wall: bool) -> Result<Vec<Frame>> {
+    let atoms = dump_blocks(&dir.join(ATOM_DUMP))?;
+    let contacts = dump_blocks(&dir.join(CONTACT_DUMP))?;
+    let cpath = dir.join(CONTACT_DUMP);
+    let mut frames = Vec::with_capacity(atoms.len());
+    let mut cit = contacts.into_iter().peekable();
+    for (step, rows) in atoms {
+        let mut fr = Frame {
+            step,
+            atoms: Vec::with_capacity(rows.len()),
+            touching: false,
+            history: ContactHistory::default(),
+        };
+        for r in rows {
+            if r.len() != 16 {
+                return Err(Error::Parse {
+                    path: dir.join(ATOM_DUMP),
+                    msg: format!("step {step}: expected 16 columns, got {}", r.len()),
+                });
+            }
+            let v = |k: usize| [r[k], r[k + 1], r[k + 2]];
+            fr.atoms.push(AtomState {
+                x: v(1),
+                v: v(4),
+                f: v(7),
+                omega: v(10),
+                torque: v(13),
+            });
+        }
+        while let Some((cs, _)) = cit.peek() {
+            if *cs < step {
+                cit.next();
+            } else {
+                break;
+            }
+        }
+        if let Some((cs, crow)) = cit.peek() {
+            if *cs == step && !crow.is_empty() {
+                let r = &crow[0];
+                if crow.len() > 1 || r.len() != 3 + n_hist {
+                    return Err(Error::Parse {
+                        path: cpath.clone(),
+                        msg: format!(
+                            "step {step}: expected one contact with {} columns",
+                            3 + n_hist
+                        ),
+                    });
+                }
+                // pair/gran/local ids: (id_i, id_j, periodic); wall/gran/local: (mesh, tri, atom).
+                let sign = if !is_wall && r[0] == 2.0 && r[1] == 1.0 {
+                    -1.0
+                } else {
+                    1.0
+                };
+                let h = &r[3..];
+                fr.touching = true;
+                fr.history.shear = [sign * h[0], sign * h[1], sign * h[2]];
+                if n_hist == 6 {
+                    fr.history.r_torque = [sign * h[3], sign * h[4], sign * h[5]];
+                }
+            }
+        }
+        frames.push(fr);
+    }
+    Ok(frames)
+}

@@ -1,0 +1,188 @@
+//! Contact laws, composed as LIGGGHTS composes them (contact_models.h, `ContactModel::
+//! surfacesIntersect`): surface model, then normal, then tangential, then rolling, all passing
+//! values through one scratch struct ([`ContactData`], LIGGGHTS' `SurfacesIntersectData`).
+//! The normal model produces `Fn`, `kn`, `kt` and the damping coefficients that later stages
+//! read. Each stage adds to the force/torque increments of both partners ([`ForceData`]).
+//!
+//! Every kernel is a pure function that mirrors one LIGGGHTS header, operation by operation,
+//! so that two-particle histories agree to round-off. The contact history of a contact is
+//! [`ContactHistory`] (LIGGGHTS' `contact_history` slots `shearx..z`, `r_torquex_old..z`).
+//!
+//! History lifetime (found in the LIGGGHTS sources, mirrored by the time loops):
+//! - particle-particle: pair_gran_base.h calls `surfacesClose` (which zeroes the history) only
+//!   for pairs within `contactDistanceFactor * radsum`; with the default factor 1 it is never
+//!   called, so the history of a pair that separates is *kept* until a neighbour-list rebuild
+//!   finds the pair beyond the neighbour cutoff `radsum + skin` (fix_contact_history.cpp copies
+//!   only pairs in the list whose contact flag is set; neigh_gran.cpp restores them).
+//! - particle-wall (mesh): fix_wall_gran.cpp marks all contacts, `handleContact` keeps only the
+//!   intersecting ones, `cleanUpContacts` deletes the rest: the history ends with the contact.
+//! - During `setup` of every `run` (Verlet::setup), forces are computed with `shearupdate = 0`:
+//!   the kernels run but do not write the history.
+
+pub mod normal;
+pub mod rolling;
+pub mod surface;
+pub mod tangential;
+
+use super::material::PairParams;
+use super::vec3::V3;
+use crate::spec::RollingModel;
+
+/// LIGGGHTS' `SurfacesIntersectData` for spheres: geometry and kinematics of one contact.
+/// `i` is the first partner; for walls `j` is the wall.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactData {
+    pub is_wall: bool,
+    pub radi: f64,
+    /// Radius of partner j (unused for walls).
+    pub radj: f64,
+    /// `radi + radj` (pair) or `radi` (wall).
+    pub radsum: f64,
+    /// Centre distance (pair) or `radi - overlap` (wall).
+    pub r: f64,
+    pub rinv: f64,
+    /// `x_i - x_j` (pair) or contact point to centre (wall).
+    pub delta: V3,
+    /// Unit normal, `delta * rinv`, pointing from j (or the wall) towards i.
+    pub en: V3,
+    /// Overlap. For walls the mesh code sets it before the surface model runs; the surface
+    /// model then overwrites it with `radsum - r` (surface_model_default.h).
+    pub deltan: f64,
+    pub meff: f64,
+    pub mi: f64,
+    pub mj: f64,
+    pub v_i: V3,
+    pub v_j: V3,
+    pub omega_i: V3,
+    pub omega_j: V3,
+    // Written by the surface model:
+    pub vn: f64,
+    pub wr: V3,
+    pub vtr: V3,
+    pub cri: f64,
+    pub crj: f64,
+}
+
+/// Force and torque increments of one partner (LIGGGHTS `ForceData`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ForceData {
+    pub delta_f: V3,
+    pub delta_torque: V3,
+}
+
+/// The history slots of one contact, in LIGGGHTS' order: tangential `shearx..z` [m], then
+/// (epsd, epsd2, epsd3) `r_torquex_old..z` [N m].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactHistory {
+    pub shear: V3,
+    pub r_torque: V3,
+}
+
+/// Values of one evaluated contact, for observers and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactOutcome {
+    pub normal: normal::NormalForce,
+    /// Tangential force on i.
+    pub ft: V3,
+    /// Rolling torque as LIGGGHTS computes it; i receives `-r_torque`, j `+r_torque`.
+    pub r_torque: V3,
+}
+
+/// Evaluates one touching contact: `ContactModel::surfacesIntersect` for
+/// surface default x normal hertz x tangential history x rolling `p.rolling`.
+/// Updates `hist` only when `update_history` (LIGGGHTS `computeflag && shearupdate`).
+pub fn surfaces_intersect(
+    cd: &mut ContactData,
+    p: &PairParams,
+    hist: &mut ContactHistory,
+    update_history: bool,
+) -> (ForceData, ForceData, ContactOutcome) {
+    let mut fi = ForceData::default();
+    let mut fj = ForceData::default();
+    surface::default_surface(cd);
+    let nf = normal::hertz(cd, p);
+    normal::apply(cd, &nf, &mut fi, &mut fj);
+    let ft = tangential::history(
+        cd,
+        &nf,
+        p,
+        &mut hist.shear,
+        update_history,
+        &mut fi,
+        &mut fj,
+    );
+    let r_torque = match p.rolling {
+        RollingModel::Off => [0.0; 3],
+        RollingModel::Cdt => rolling::cdt::torque(cd, &nf, p),
+        RollingModel::Epsd => rolling::epsd::torque(cd, &nf, p, &mut hist.r_torque, update_history),
+        RollingModel::Epsd2 => {
+            rolling::epsd2::torque(cd, &nf, p, &mut hist.r_torque, update_history)
+        }
+        RollingModel::Epsd3 => {
+            rolling::epsd3::torque(cd, &nf, p, &mut hist.r_torque, update_history)
+        }
+    };
+    if p.rolling != RollingModel::Off {
+        rolling::apply(r_torque, &mut fi, &mut fj);
+    }
+    (
+        fi,
+        fj,
+        ContactOutcome {
+            normal: nf,
+            ft,
+            r_torque,
+        },
+    )
+}
+
+#[cfg(test)]
+pub(crate) mod test_support {
+    use super::*;
+    use crate::spec::{Material, Models, NormalModel, TangentialModel};
+
+    pub fn material() -> Material {
+        Material {
+            youngs_modulus: 7.0e10,
+            poisson_ratio: 0.3,
+            density: 2500.0,
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: 0.5,
+            rolling_damping: 0.3,
+            rolling_stiffness: 3.0,
+        }
+    }
+
+    pub fn params(rolling: RollingModel) -> PairParams {
+        let models = Models {
+            normal: NormalModel::Hertz,
+            tangential: TangentialModel::History,
+            rolling,
+            torsion_torque: false,
+        };
+        PairParams::new(&material(), &models, 1e-8)
+    }
+
+    /// Two spheres of radius 1 mm along z with overlap 1 um, i on top; i spins about y.
+    pub fn pair(omega_i: V3) -> ContactData {
+        let (ri, rj) = (1e-3, 1e-3);
+        let dz = 2e-3 - 1e-6;
+        let m = crate::solver::material::sphere_mass(1e-3, 2500.0);
+        ContactData {
+            is_wall: false,
+            radi: ri,
+            radj: rj,
+            radsum: ri + rj,
+            r: dz,
+            rinv: 1.0 / dz,
+            delta: [0.0, 0.0, dz],
+            en: [0.0, 0.0, dz * (1.0 / dz)],
+            meff: m * m / (m + m),
+            mi: m,
+            mj: m,
+            omega_i,
+            ..Default::default()
+        }
+    }
+}

@@ -1,0 +1,59 @@
+//! `rolling_friction epsd3` (rolling_model_epsd3.h): epsd with a user stiffness factor.
+
+use super::super::normal::NormalForce;
+use super::super::ContactData;
+use super::{reff, relative_rotation, rolling_inertia, spring, tangential_part};
+use crate::solver::material::PairParams;
+use crate::solver::vec3::V3;
+
+/// As epsd but `k_r = coeffRollStiffness kn mu_r^2 reff^2` (evaluated
+/// `coeffRollStiffness*kn*rmu*rmu*reff*reff`). Walls use `radius = radi` for `reff` and
+/// `I_r = 1.4 mi radi^2`, the same values epsd uses.
+pub fn torque(
+    cd: &ContactData,
+    nf: &NormalForce,
+    p: &PairParams,
+    hist: &mut V3,
+    update_history: bool,
+) -> V3 {
+    let reff = reff(cd);
+    let r_inertia = rolling_inertia(cd, reff);
+    let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
+    let rmu = p.coeff_roll_frict;
+    let kr = p.coeff_roll_stiffness * nf.kn * rmu * rmu * reff * reff;
+    let m_max = nf.fn_.abs() * reff * rmu;
+    let (mut m, capped) = spring(*hist, wr_tot, kr, p.dt, m_max);
+    if update_history {
+        *hist = m;
+    }
+    if !capped {
+        let r_coef = p.coeff_roll_visc * 2.0 * (r_inertia * kr).sqrt();
+        for k in 0..3 {
+            m[k] += r_coef * wr_tot[k];
+        }
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::super::normal::hertz;
+    use super::super::super::surface::default_surface;
+    use super::super::super::test_support::{pair, params};
+    use super::*;
+    use crate::spec::RollingModel;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn stiffness_factor_scales_kr() {
+        let mut p = params(RollingModel::Epsd3);
+        p.coeff_roll_visc = 0.0;
+        let mut cd = pair([0.0, 100.0, 0.0]);
+        default_surface(&mut cd);
+        let nf = hertz(&cd, &p);
+        let mut hist = [0.0; 3];
+        let m = torque(&cd, &nf, &p, &mut hist, true);
+        let kr = 3.0 * nf.kn * 0.25 * 0.25e-6;
+        assert_relative_eq!(m[1], kr * 1e-8 * 100.0, max_relative = 1e-14);
+    }
+}

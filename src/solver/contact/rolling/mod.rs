@@ -1,0 +1,87 @@
+//! Rolling resistance. Keyword = LIGGGHTS `rolling_friction <kw>` (rolling_model_<kw>.h).
+//! The variants do not share a formula: cdt uses `kn deltan`, epsd/epsd3 build `k_r` from
+//! `kn`, epsd2 from `kt`; only epsd and epsd3 have the viscous dashpot.
+
+pub mod cdt;
+pub mod epsd;
+pub mod epsd2;
+pub mod epsd3;
+
+use super::{ContactData, ForceData};
+use crate::solver::vec3::V3;
+
+/// Adds the rolling torque as every rolling header does: `i -= r_torque`, `j += r_torque`
+/// (the j part is discarded for walls).
+pub fn apply(r_torque: V3, fi: &mut ForceData, fj: &mut ForceData) {
+    for k in 0..3 {
+        fi.delta_torque[k] -= r_torque[k];
+        fj.delta_torque[k] += r_torque[k];
+    }
+}
+
+/// Relative angular velocity the rolling models see: `omega_i - omega_j` for pairs,
+/// the surface model's `wr = cr omega_i / r` for walls.
+pub fn relative_rotation(cd: &ContactData) -> V3 {
+    if cd.is_wall {
+        cd.wr
+    } else {
+        [
+            cd.omega_i[0] - cd.omega_j[0],
+            cd.omega_i[1] - cd.omega_j[1],
+            cd.omega_i[2] - cd.omega_j[2],
+        ]
+    }
+}
+
+/// `reff`: `radi` for walls, else `radi radj / (radi + radj)`.
+pub fn reff(cd: &ContactData) -> f64 {
+    if cd.is_wall {
+        cd.radi
+    } else {
+        cd.radi * cd.radj / (cd.radi + cd.radj)
+    }
+}
+
+/// Rolling inertia of epsd/epsd3 (3D): wall `1.4 mi reff^2`; pair
+/// `1.4 (mi radi^2)(mj radj^2) / (mi radi^2 + mj radj^2)`, evaluated left to right.
+pub fn rolling_inertia(cd: &ContactData, reff: f64) -> f64 {
+    if cd.is_wall {
+        1.4 * cd.mi * reff * reff
+    } else {
+        let a = cd.mi * cd.radi * cd.radi;
+        let b = cd.mj * cd.radj * cd.radj;
+        1.4 * a * b / (a + b)
+    }
+}
+
+/// The part of `wr` the spring sees: all of it with `torsionTorque on`, else the part
+/// perpendicular to the normal, `wr - (wr . en) en`.
+pub fn tangential_part(wr: V3, en: V3, torsion_torque: bool) -> V3 {
+    if torsion_torque {
+        wr
+    } else {
+        let d = wr[0] * en[0] + wr[1] * en[1] + wr[2] * en[2];
+        [wr[0] - en[0] * d, wr[1] - en[1] * d, wr[2] - en[2] * d]
+    }
+}
+
+/// The elastic-plastic spring shared by epsd, epsd2 and epsd3 (`calcRollTorque`):
+/// `M = M_old + k_r dt wr_tot`; if `|M| > |Fn| reff mu_r`, scale it onto that limit.
+/// Returns (`M`, whether it was capped). The caller decides what is stored and whether the
+/// dashpot is added, since the three headers differ there.
+pub fn spring(old: V3, wr_tot: V3, kr: f64, dt: f64, m_max: f64) -> (V3, bool) {
+    let s = dt * kr;
+    let mut m = [
+        old[0] + wr_tot[0] * s,
+        old[1] + wr_tot[1] * s,
+        old[2] + wr_tot[2] * s,
+    ];
+    let mag = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+    if mag > m_max {
+        let factor = m_max / mag;
+        m = [m[0] * factor, m[1] * factor, m[2] * factor];
+        (m, true)
+    } else {
+        (m, false)
+    }
+}

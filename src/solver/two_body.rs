@@ -1,0 +1,382 @@
+//! Time loop of a contact case: two spheres, or one sphere and a triangle-mesh wall, in
+//! LIGGGHTS' order of operations (Verlet::setup / Verlet::run with fix nve/sphere,
+//! fix move, pair gran and fix wall/gran). Owns all state; returns frames, does no I/O.
+
+use super::contact::{surfaces_intersect, ContactData, ContactHistory, ForceData};
+use super::integrate::NveSphere;
+use super::kinematics::{rotation_period, FixMove};
+use super::material::{sphere_mass, PairParams};
+use super::mesh::{square_wall, TriContact, Triangle};
+use super::vec3::V3;
+use crate::error::{Error, Result};
+use crate::spec::{Case, Motion};
+
+/// Neighbour skin of the contact cases [m], the same in the deck: a quarter of the smallest
+/// radius.
+pub fn contact_skin(case: &Case) -> f64 {
+    0.25 * case
+        .particles
+        .iter()
+        .map(|p| p.radius)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Per-atom state at an output step, as a LIGGGHTS `dump custom` row.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AtomState {
+    pub x: V3,
+    pub v: V3,
+    pub f: V3,
+    pub omega: V3,
+    pub torque: V3,
+}
+
+/// One output step: all atoms (in id order) and the history of the touching contact, oriented
+/// as LIGGGHTS stores it with atom 1 as `i` (zero when nothing touches).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub step: u64,
+    pub atoms: Vec<AtomState>,
+    pub touching: bool,
+    pub history: ContactHistory,
+}
+
+struct Body {
+    s: AtomState,
+    radius: f64,
+    mass: f64,
+    motion: Option<FixMove>,
+    integrate: bool,
+}
+
+struct Sim<'a> {
+    case: &'a Case,
+    params: PairParams,
+    nve: NveSphere,
+    bodies: Vec<Body>,
+    wall: Option<[Triangle; 2]>,
+    /// Pair history while the pair is in the neighbour list.
+    pair_hist: Option<ContactHistory>,
+    pair_touching: bool,
+    /// Wall history per triangle while in contact.
+    wall_hist: [Option<ContactHistory>; 2],
+    skin: f64,
+    xhold: Vec<V3>,
+    step: u64,
+}
+
+/// Runs a validated contact case and returns a frame at step 0 and every `output_every`.
+pub fn run(case: &Case) -> Result<Vec<Frame>> {
+    let mut sim = Sim::new(case);
+    let mut frames = Vec::with_capacity((case.steps / case.output_every + 1) as usize);
+    let reverse = case.reverse_at_step;
+    sim.setup()?;
+    frames.push(sim.frame());
+    while sim.step < case.steps {
+        if Some(sim.step) == reverse {
+            sim.reverse_motions();
+            sim.setup()?;
+        }
+        sim.advance()?;
+        if sim.step.is_multiple_of(case.output_every) {
+            frames.push(sim.frame());
+        }
+    }
+    Ok(frames)
+}
+
+impl<'a> Sim<'a> {
+    fn new(case: &'a Case) -> Self {
+        let rho = case.material.density;
+        let bodies: Vec<Body> = case
+            .particles
+            .iter()
+            .map(|p| {
+                // The data file holds the diameter; LIGGGHTS reads radius = 0.5 * diameter.
+                let radius = 0.5 * (2.0 * p.radius);
+                let motion = match &p.motion {
+                    Motion::Rotate { omega } => {
+                        Some(FixMove::rotate(p.position, *omega, rotation_period(*omega)))
+                    }
+                    Motion::Linear { velocity } => Some(FixMove::Linear {
+                        xoriginal: p.position,
+                        velocity: *velocity,
+                        time_origin: 0,
+                    }),
+                    Motion::Free | Motion::Fixed => None,
+                };
+                Body {
+                    s: AtomState {
+                        x: p.position,
+                        v: p.velocity,
+                        omega: p.omega,
+                        ..Default::default()
+                    },
+                    radius,
+                    mass: sphere_mass(radius, rho),
+                    motion,
+                    integrate: matches!(p.motion, Motion::Free),
+                }
+            })
+            .collect();
+        let xhold = bodies.iter().map(|b| b.s.x).collect();
+        Sim {
+            case,
+            params: PairParams::new(&case.material, &case.models, case.dt),
+            nve: NveSphere::new(case.dt),
+            bodies,
+            wall: case.wall.as_ref().map(|w| square_wall(w.z, w.half_size)),
+            pair_hist: None,
+            pair_touching: false,
+            wall_hist: [None, None],
+            skin: contact_skin(case),
+            xhold,
+            step: 0,
+        }
+    }
+
+    /// Verlet::setup: neighbour build, then forces without history update.
+    fn setup(&mut self) -> Result<()> {
+        self.build_neighbors();
+        self.compute_forces(false)
+    }
+
+    /// A new run after `unfix`/`fix`: rotations about the negated axis, linear motions with
+    /// negated velocity from the current position, time origin = current step.
+    fn reverse_motions(&mut self) {
+        let step = self.step;
+        for b in &mut self.bodies {
+            b.motion = match b.motion {
+                Some(FixMove::Rotate {
+                    omega_rotate,
+                    runit,
+                    ..
+                }) => Some(FixMove::Rotate {
+                    point: b.s.x,
+                    omega_rotate,
+                    runit: [-runit[0], -runit[1], -runit[2]],
+                }),
+                Some(FixMove::Linear { velocity, .. }) => Some(FixMove::Linear {
+                    xoriginal: b.s.x,
+                    velocity: [-velocity[0], -velocity[1], -velocity[2]],
+                    time_origin: step,
+                }),
+                None => None,
+            };
+        }
+    }
+
+    fn advance(&mut self) -> Result<()> {
+        self.step += 1;
+        let (step, dt) = (self.step, self.case.dt);
+        for b in &mut self.bodies {
+            if b.integrate {
+                let s = &mut b.s;
+                self.nve.initial(
+                    &mut s.x,
+                    &mut s.v,
+                    &mut s.omega,
+                    s.f,
+                    s.torque,
+                    b.radius,
+                    b.mass,
+                );
+            }
+            if let Some(m) = &b.motion {
+                m.initial_integrate(step, dt, &mut b.s.x, &mut b.s.v, &mut b.s.omega);
+            }
+        }
+        if self.needs_rebuild() {
+            self.build_neighbors();
+        }
+        self.compute_forces(true)?;
+        for b in &mut self.bodies {
+            if b.integrate {
+                let s = &mut b.s;
+                self.nve
+                    .finish(&mut s.v, &mut s.omega, s.f, s.torque, b.radius, b.mass);
+            }
+        }
+        for b in &self.bodies {
+            let s = &b.s;
+            let finite = [s.x, s.v, s.f, s.omega, s.torque]
+                .iter()
+                .all(|v| v.iter().all(|c| c.is_finite()));
+            if !finite {
+                return Err(Error::Solver {
+                    step,
+                    msg: "non-finite particle state".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// `Neighbor::check_distance`: rebuild when any atom moved more than skin/2.
+    fn needs_rebuild(&self) -> bool {
+        let trigger = 0.5 * self.skin;
+        self.bodies.iter().zip(&self.xhold).any(|(b, h)| {
+            let d = [b.s.x[0] - h[0], b.s.x[1] - h[1], b.s.x[2] - h[2]];
+            d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > trigger * trigger
+        })
+    }
+
+    /// Neighbour build: a pair beyond `radsum + skin` leaves the list and loses its history.
+    fn build_neighbors(&mut self) {
+        self.xhold = self.bodies.iter().map(|b| b.s.x).collect();
+        if self.bodies.len() == 2 {
+            let (a, b) = (&self.bodies[0], &self.bodies[1]);
+            let d = [
+                a.s.x[0] - b.s.x[0],
+                a.s.x[1] - b.s.x[1],
+                a.s.x[2] - b.s.x[2],
+            ];
+            let rsq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            let cut = a.radius + b.radius + self.skin;
+            if rsq > cut * cut {
+                self.pair_hist = None;
+            } else if self.pair_hist.is_none() {
+                self.pair_hist = Some(ContactHistory::default());
+            }
+        }
+    }
+
+    /// force_clear, pair forces (pair_gran_base.h `compute_force`), then wall forces
+    /// (fix_wall_gran.cpp `post_force_mesh`).
+    fn compute_forces(&mut self, update_history: bool) -> Result<()> {
+        for b in &mut self.bodies {
+            b.s.f = [0.0; 3];
+            b.s.torque = [0.0; 3];
+        }
+        self.pair_touching = false;
+        if self.bodies.len() == 2 {
+            self.pair_force(update_history);
+        }
+        if self.wall.is_some() {
+            self.wall_force(update_history)?;
+        }
+        Ok(())
+    }
+
+    fn pair_force(&mut self, update_history: bool) {
+        let Some(hist) = self.pair_hist.as_mut() else {
+            return;
+        };
+        let (bi, bj) = (&self.bodies[0], &self.bodies[1]);
+        let delta = [
+            bi.s.x[0] - bj.s.x[0],
+            bi.s.x[1] - bj.s.x[1],
+            bi.s.x[2] - bj.s.x[2],
+        ];
+        let rsq = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
+        let radsum = bi.radius + bj.radius;
+        if rsq >= radsum * radsum {
+            return;
+        }
+        let r = rsq.sqrt();
+        let rinv = 1.0 / r;
+        let (mi, mj) = (bi.mass, bj.mass);
+        let mut cd = ContactData {
+            is_wall: false,
+            radi: bi.radius,
+            radj: bj.radius,
+            radsum,
+            r,
+            rinv,
+            delta,
+            en: [delta[0] * rinv, delta[1] * rinv, delta[2] * rinv],
+            meff: mi * mj / (mi + mj),
+            mi,
+            mj,
+            v_i: bi.s.v,
+            v_j: bj.s.v,
+            omega_i: bi.s.omega,
+            omega_j: bj.s.omega,
+            ..Default::default()
+        };
+        let (fi, fj, _) = surfaces_intersect(&mut cd, &self.params, hist, update_history);
+        self.pair_touching = true;
+        add_force(&mut self.bodies[0].s, &fi);
+        add_force(&mut self.bodies[1].s, &fj);
+    }
+
+    fn wall_force(&mut self, update_history: bool) -> Result<()> {
+        let tris = self.wall.expect("wall present");
+        for (t, tri) in tris.iter().enumerate() {
+            let b = &self.bodies[0];
+            let radi = b.radius;
+            match tri.resolve(b.s.x) {
+                TriContact::Face { d, delta } => {
+                    let deltan = d - radi; // resolveTriSphereContactBary: d - rSphere
+                    if deltan > 0.0 {
+                        self.wall_hist[t] = None;
+                        continue;
+                    }
+                    let overlap = -deltan;
+                    let sdelta = [-delta[0], -delta[1], -delta[2]];
+                    let r = radi - overlap;
+                    let rinv = 1.0 / r;
+                    let mut cd = ContactData {
+                        is_wall: true,
+                        radi,
+                        radsum: radi,
+                        r,
+                        rinv,
+                        delta: sdelta,
+                        en: [sdelta[0] * rinv, sdelta[1] * rinv, sdelta[2] * rinv],
+                        deltan: overlap,
+                        meff: b.mass,
+                        mi: b.mass,
+                        v_i: b.s.v,
+                        v_j: [0.0; 3],
+                        omega_i: b.s.omega,
+                        ..Default::default()
+                    };
+                    let hist = self.wall_hist[t].get_or_insert_with(ContactHistory::default);
+                    let (fi, _, _) =
+                        surfaces_intersect(&mut cd, &self.params, hist, update_history);
+                    add_force(&mut self.bodies[0].s, &fi);
+                }
+                TriContact::EdgeOrCorner { d } => {
+                    if d <= radi {
+                        return Err(Error::Solver {
+                            step: self.step,
+                            msg: "sphere touches a wall edge or corner; the contact cases \
+                                  support face contacts only"
+                                .into(),
+                        });
+                    }
+                    self.wall_hist[t] = None;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn frame(&self) -> Frame {
+        let (touching, history) = if self.wall.is_some() {
+            match self.wall_hist.iter().flatten().next() {
+                Some(h) => (true, *h),
+                None => (false, ContactHistory::default()),
+            }
+        } else if self.pair_touching {
+            (true, self.pair_hist.unwrap_or_default())
+        } else {
+            (false, ContactHistory::default())
+        };
+        Frame {
+            step: self.step,
+            atoms: self.bodies.iter().map(|b| b.s).collect(),
+            touching,
+            history,
+        }
+    }
+}
+
+/// pair_gran_base.h `force_update`: `f += relax * delta_F` with relax = 1 (exact).
+fn add_force(s: &mut AtomState, fd: &ForceData) {
+    for k in 0..3 {
+        s.f[k] += fd.delta_f[k];
+        s.torque[k] += fd.delta_torque[k];
+    }
+}

@@ -1,0 +1,685 @@
+//! Case descriptions: the only serde boundary for inputs.
+//!
+//! A case file (TOML, `version = 1`) is parsed into [`CaseFile`] and validated into a [`Case`].
+//! Both the LIGGGHTS deck ([`crate::deck`]) and the native run ([`crate::solver`]) are made
+//! from the same validated `Case`, so they cannot drift apart. Validation refuses anything a
+//! deck could not represent faithfully or that would let a case file inject deck commands:
+//! names are identifiers, every number is finite and in range.
+
+mod builtin;
+mod stability;
+
+pub use builtin::{builtin_case, builtin_names, BUILTIN_CASES};
+pub use stability::{hertz_collision, rayleigh_time, HertzCollision};
+
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Current case-file format version.
+pub const CASE_VERSION: u32 = 1;
+
+/// Normal contact model. Keyword = LIGGGHTS `model <kw>` (normal_model_<kw>.h).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalModel {
+    Hertz,
+}
+
+/// Tangential contact model. Keyword = LIGGGHTS `tangential <kw>` (tangential_model_<kw>.h).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TangentialModel {
+    History,
+}
+
+/// Rolling resistance. Keyword = LIGGGHTS `rolling_friction <kw>` (rolling_model_<kw>.h).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RollingModel {
+    Off,
+    Cdt,
+    Epsd,
+    Epsd2,
+    Epsd3,
+}
+
+impl RollingModel {
+    pub const ALL: [RollingModel; 5] = [
+        RollingModel::Off,
+        RollingModel::Cdt,
+        RollingModel::Epsd,
+        RollingModel::Epsd2,
+        RollingModel::Epsd3,
+    ];
+
+    /// The LIGGGHTS keyword (`off` for no rolling resistance).
+    pub fn keyword(self) -> &'static str {
+        match self {
+            RollingModel::Off => "off",
+            RollingModel::Cdt => "cdt",
+            RollingModel::Epsd => "epsd",
+            RollingModel::Epsd2 => "epsd2",
+            RollingModel::Epsd3 => "epsd3",
+        }
+    }
+
+    /// Parses a keyword; the error lists the valid ones.
+    pub fn parse(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|m| m.keyword() == s)
+            .ok_or_else(|| Error::Unknown {
+                what: "rolling model",
+                name: s.to_string(),
+                valid: Self::ALL.map(|m| m.keyword()).join(", "),
+            })
+    }
+
+    /// Whether the model stores the rolling torque `r_torque_old` as contact history.
+    pub fn has_history(self) -> bool {
+        matches!(
+            self,
+            RollingModel::Epsd | RollingModel::Epsd2 | RollingModel::Epsd3
+        )
+    }
+
+    /// Whether `coefficientRollingViscousDamping` (eta_r) acts in this model.
+    pub fn has_damping(self) -> bool {
+        matches!(self, RollingModel::Epsd | RollingModel::Epsd3)
+    }
+}
+
+impl std::fmt::Display for RollingModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.keyword())
+    }
+}
+
+/// Material constants (one material for particles and walls), SI units.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Young's modulus E [Pa] (`youngsModulus`).
+    pub youngs_modulus: f64,
+    /// Poisson's ratio nu [-] (`poissonsRatio`).
+    pub poisson_ratio: f64,
+    /// Particle density rho [kg/m^3].
+    pub density: f64,
+    /// Coefficient of restitution e [-] (`coefficientRestitution`), 0.05 < e <= 1.
+    pub restitution: f64,
+    /// Sliding friction mu_p [-] (`coefficientFriction`).
+    pub friction: f64,
+    /// Rolling friction mu_r [-] (`coefficientRollingFriction`).
+    #[serde(default)]
+    pub rolling_friction: f64,
+    /// Rolling viscous damping eta_r [-] (`coefficientRollingViscousDamping`, epsd/epsd3).
+    #[serde(default)]
+    pub rolling_damping: f64,
+    /// epsd3 rolling stiffness factor [-] (`fix property/global rollingStiffness scalar`, the
+    /// name global_properties.cpp registers), >= 1 in SI.
+    #[serde(default = "default_rolling_stiffness")]
+    pub rolling_stiffness: f64,
+}
+
+fn default_rolling_stiffness() -> f64 {
+    2.25
+}
+
+/// Contact model composition, as in `pair_style gran model hertz tangential history ...`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Models {
+    #[serde(default = "default_normal")]
+    pub normal: NormalModel,
+    #[serde(default = "default_tangential")]
+    pub tangential: TangentialModel,
+    pub rolling: RollingModel,
+    /// LIGGGHTS `torsionTorque on|off` of the rolling models (default off).
+    #[serde(default)]
+    pub torsion_torque: bool,
+}
+
+fn default_normal() -> NormalModel {
+    NormalModel::Hertz
+}
+fn default_tangential() -> TangentialModel {
+    TangentialModel::History
+}
+
+/// Imposed kinematics of a particle.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Motion {
+    /// Integrated by nve/sphere.
+    Free,
+    /// Not integrated: position, velocity and angular velocity stay as given.
+    Fixed,
+    /// Spins about its own centre at `omega` [rad/s] (LIGGGHTS `fix move rotate`).
+    Rotate { omega: [f64; 3] },
+    /// Moves at constant `velocity` [m/s] (LIGGGHTS `fix move linear`).
+    Linear { velocity: [f64; 3] },
+}
+
+/// One sphere of a contact case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticleSpec {
+    /// Radius [m].
+    pub radius: f64,
+    /// Initial position [m].
+    pub position: [f64; 3],
+    /// Initial velocity [m/s].
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Initial angular velocity [rad/s].
+    #[serde(default)]
+    pub omega: [f64; 3],
+    #[serde(default = "default_motion")]
+    pub motion: Motion,
+}
+
+fn default_motion() -> Motion {
+    Motion::Free
+}
+
+/// A flat triangle-mesh wall: the square |x|,|y| <= half_size at height z, normal +z, made of
+/// two triangles (LIGGGHTS `fix mesh/surface` + `fix wall/gran ... mesh`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallSpec {
+    /// Height of the plane [m].
+    pub z: f64,
+    /// Half the side of the square [m].
+    pub half_size: f64,
+}
+
+/// A case file as written by a user (before validation).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaseFile {
+    /// Format version; must be 1.
+    pub version: u32,
+    /// Identifier: letters, digits, `_` and `-`, at most 64 characters.
+    pub name: String,
+    /// One line shown by `verify contact --list`. Never written into a deck.
+    #[serde(default)]
+    pub description: String,
+    /// Time step [s].
+    pub dt: f64,
+    /// Number of time steps.
+    pub steps: u64,
+    /// Output interval [steps].
+    pub output_every: u64,
+    /// Step at which prescribed rotations and velocities are reversed (a second LIGGGHTS run).
+    #[serde(default)]
+    pub reverse_at_step: Option<u64>,
+    /// Rolling models this case is run with by `--rolling all` (default: `models.rolling`).
+    #[serde(default)]
+    pub rolling_models: Vec<RollingModel>,
+    pub material: Material,
+    pub models: Models,
+    pub particles: Vec<ParticleSpec>,
+    #[serde(default)]
+    pub wall: Option<WallSpec>,
+}
+
+/// A validated case: every field checked, ready for both codes.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Case {
+    pub file: CaseFile,
+    /// Warnings found during validation (e.g. dt above 20 % of the Rayleigh time).
+    pub warnings: Vec<String>,
+}
+
+impl std::ops::Deref for Case {
+    type Target = CaseFile;
+    fn deref(&self) -> &CaseFile {
+        &self.file
+    }
+}
+
+impl CaseFile {
+    /// Parses TOML text; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
+        toml::from_str(text).map_err(|e| Error::CaseFile {
+            path: origin.to_path_buf(),
+            msg: e.to_string(),
+        })
+    }
+
+    /// Reads and parses a case file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_toml(&text, path)
+    }
+
+    /// The rolling models `--rolling all` runs this case with.
+    pub fn applicable_rolling(&self) -> Vec<RollingModel> {
+        if self.rolling_models.is_empty() {
+            vec![self.models.rolling]
+        } else {
+            self.rolling_models.clone()
+        }
+    }
+
+    /// A copy of this case with another rolling model.
+    pub fn with_rolling(&self, model: RollingModel) -> CaseFile {
+        let mut c = self.clone();
+        c.models.rolling = model;
+        c
+    }
+
+    /// Validates every field; see the module doc.
+    pub fn validate(self) -> Result<Case> {
+        let mut warnings = Vec::new();
+        if self.version != CASE_VERSION {
+            return Err(Error::invalid("version", self.version, "1"));
+        }
+        check_identifier("name", &self.name)?;
+        if self.description.contains(['\n', '\r']) {
+            return Err(Error::invalid(
+                "description",
+                "(multi-line text)",
+                "a single line",
+            ));
+        }
+        let m = &self.material;
+        positive("material.youngs_modulus", m.youngs_modulus)?;
+        range_ge(
+            "material.youngs_modulus",
+            m.youngs_modulus,
+            5e6,
+            "LIGGGHTS requires >= 5e6 Pa in SI",
+        )?;
+        finite("material.poisson_ratio", m.poisson_ratio)?;
+        if !(0.0..0.5).contains(&m.poisson_ratio) {
+            return Err(Error::invalid(
+                "material.poisson_ratio",
+                m.poisson_ratio,
+                "0 <= nu < 0.5",
+            ));
+        }
+        positive("material.density", m.density)?;
+        finite("material.restitution", m.restitution)?;
+        if !(m.restitution > 0.05 && m.restitution <= 1.0) {
+            return Err(Error::invalid(
+                "material.restitution",
+                m.restitution,
+                "0.05 < e <= 1 (LIGGGHTS' range)",
+            ));
+        }
+        non_negative("material.friction", m.friction)?;
+        non_negative("material.rolling_friction", m.rolling_friction)?;
+        non_negative("material.rolling_damping", m.rolling_damping)?;
+        finite("material.rolling_stiffness", m.rolling_stiffness)?;
+        if m.rolling_stiffness < 1.0 {
+            return Err(Error::invalid(
+                "material.rolling_stiffness",
+                m.rolling_stiffness,
+                ">= 1 (LIGGGHTS epsd3 in SI units)",
+            ));
+        }
+        if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {
+            return Err(Error::invalid(
+                "material.rolling_damping",
+                m.rolling_damping,
+                format!(
+                    "0 with rolling model `{}` (eta_r acts only in epsd and epsd3)",
+                    self.models.rolling
+                ),
+            ));
+        }
+        positive("dt", self.dt)?;
+        if self.steps == 0 || self.steps > 100_000_000 {
+            return Err(Error::invalid("steps", self.steps, "1 ..= 100000000"));
+        }
+        if self.output_every == 0 || self.output_every > self.steps {
+            return Err(Error::invalid(
+                "output_every",
+                self.output_every,
+                format!("1 ..= steps ({})", self.steps),
+            ));
+        }
+        if let Some(r) = self.reverse_at_step {
+            if r == 0 || r >= self.steps {
+                return Err(Error::invalid(
+                    "reverse_at_step",
+                    r,
+                    format!("1 ..= {} (strictly inside the run)", self.steps - 1),
+                ));
+            }
+        }
+        let expected = if self.wall.is_some() { 1 } else { 2 };
+        if self.particles.len() != expected {
+            return Err(Error::invalid(
+                "particles",
+                format!("{} entries", self.particles.len()),
+                format!(
+                    "{expected} ({})",
+                    if expected == 1 {
+                        "one sphere against the wall"
+                    } else {
+                        "two spheres"
+                    }
+                ),
+            ));
+        }
+        for (k, p) in self.particles.iter().enumerate() {
+            let f = |s: &str| format!("particles[{k}].{s}");
+            positive(&f("radius"), p.radius)?;
+            finite3(&f("position"), p.position)?;
+            finite3(&f("velocity"), p.velocity)?;
+            finite3(&f("omega"), p.omega)?;
+            match &p.motion {
+                Motion::Rotate { omega } => {
+                    finite3(&f("motion.omega"), *omega)?;
+                    if omega.iter().all(|w| *w == 0.0) {
+                        return Err(Error::invalid(
+                            f("motion.omega"),
+                            "[0, 0, 0]",
+                            "a non-zero angular velocity (use kind = \"fixed\" for none)",
+                        ));
+                    }
+                }
+                Motion::Linear { velocity } => finite3(&f("motion.velocity"), *velocity)?,
+                Motion::Free | Motion::Fixed => {}
+            }
+        }
+        let bounds = domain_half_size(&self);
+        for (k, p) in self.particles.iter().enumerate() {
+            for d in 0..3 {
+                if p.position[d].abs() + p.radius > 0.5 * bounds {
+                    return Err(Error::invalid(
+                        format!("particles[{k}].position"),
+                        format!("{:?}", p.position),
+                        "within the simulation box",
+                    ));
+                }
+            }
+        }
+        let rmin = self
+            .particles
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min);
+        if let Some(w) = &self.wall {
+            finite("wall.z", w.z)?;
+            positive("wall.half_size", w.half_size)?;
+            let p = &self.particles[0];
+            let overlap = p.radius - (p.position[2] - w.z);
+            if p.position[2] <= w.z || overlap >= p.radius {
+                return Err(Error::invalid(
+                    "particles[0].position",
+                    format!("{:?}", p.position),
+                    "above the wall with an initial overlap smaller than the radius",
+                ));
+            }
+            if w.half_size < 4.0 * p.radius
+                || p.position[0].abs() + p.radius > 0.5 * w.half_size
+                || p.position[1].abs() + p.radius > 0.5 * w.half_size
+            {
+                return Err(Error::invalid(
+                    "wall.half_size",
+                    w.half_size,
+                    ">= 4 radii and the sphere within the inner half of the wall",
+                ));
+            }
+            // The sphere must touch the face of one triangle only, away from the diagonal.
+            let (x, y) = (p.position[0], p.position[1]);
+            if (x - y).abs() / std::f64::consts::SQRT_2 <= p.radius * 1.5 {
+                return Err(Error::invalid(
+                    "particles[0].position",
+                    format!("{:?}", p.position),
+                    "at least 1.5 radii away from the wall's diagonal x = y",
+                ));
+            }
+        } else {
+            let (a, b) = (&self.particles[0], &self.particles[1]);
+            let d = dist(a.position, b.position);
+            if d == 0.0 {
+                return Err(Error::invalid(
+                    "particles[1].position",
+                    format!("{:?}", b.position),
+                    "different from particles[0].position",
+                ));
+            }
+            let overlap = a.radius + b.radius - d;
+            if overlap >= rmin {
+                return Err(Error::invalid(
+                    "particles",
+                    format!("initial overlap {overlap:e} m"),
+                    format!("an initial overlap smaller than the smaller radius ({rmin:e} m)"),
+                ));
+            }
+        }
+        let t_r = rayleigh_time(m, rmin);
+        if self.dt > t_r {
+            return Err(Error::invalid(
+                "dt",
+                self.dt,
+                format!("<= the Rayleigh time {t_r:.4e} s of the smallest particle"),
+            ));
+        }
+        if self.dt > 0.2 * t_r {
+            warnings.push(format!(
+                "dt = {:e} s is {:.0} % of the Rayleigh time {:.4e} s (above 20 %)",
+                self.dt,
+                100.0 * self.dt / t_r,
+                t_r
+            ));
+        }
+        for r in self.applicable_rolling() {
+            if m.rolling_damping > 0.0 && !r.has_damping() {
+                return Err(Error::invalid(
+                    "rolling_models",
+                    r,
+                    "models with damping (epsd, epsd3) when material.rolling_damping > 0",
+                ));
+            }
+        }
+        Ok(Case {
+            file: self,
+            warnings,
+        })
+    }
+}
+
+/// Half-width of the cubic simulation box both codes use for a contact case [m]: large enough
+/// for the particles (and the wall) with a margin.
+pub fn domain_half_size(c: &CaseFile) -> f64 {
+    let mut ext: f64 = 0.0;
+    for p in &c.particles {
+        for d in 0..3 {
+            ext = ext.max(p.position[d].abs() + 4.0 * p.radius);
+        }
+    }
+    if let Some(w) = &c.wall {
+        ext = ext.max(w.half_size).max(w.z.abs() + 1e-3 * w.half_size);
+    }
+    // Round up to a power of two so the box bounds print exactly.
+    2f64.powi(ext.log2().ceil() as i32 + 1)
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Identifiers that reach a deck: `[A-Za-z][A-Za-z0-9_-]{0,63}`.
+pub fn check_identifier(field: &str, s: &str) -> Result<()> {
+    let ok = !s.is_empty()
+        && s.len() <= 64
+        && s.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("{s:?}"),
+            "an identifier: a letter, then letters, digits, '_' or '-' (at most 64)",
+        ))
+    }
+}
+
+fn finite(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "a finite number"))
+    }
+}
+fn finite3(field: &str, v: [f64; 3]) -> Result<()> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            field,
+            format!("{v:?}"),
+            "three finite numbers",
+        ))
+    }
+}
+fn positive(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "a finite number > 0"))
+    }
+}
+fn non_negative(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "a finite number >= 0"))
+    }
+}
+fn range_ge(field: &str, v: f64, min: f64, why: &str) -> Result<()> {
+    if v >= min {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, format!(">= {min:e} ({why})")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn base() -> CaseFile {
+        builtin_case("rolling_plastic").unwrap()
+    }
+
+    fn err_of(c: CaseFile) -> String {
+        c.validate().unwrap_err().to_string()
+    }
+
+    #[test]
+    fn builtin_cases_validate() {
+        for name in builtin_names() {
+            let c = builtin_case(name).unwrap();
+            for r in c.applicable_rolling() {
+                c.with_rolling(r).validate().unwrap();
+            }
+        }
+    }
+
+    #[test]
+    fn nan_and_negative_values_name_the_field() {
+        let mut c = base();
+        c.material.youngs_modulus = f64::NAN;
+        assert!(err_of(c).contains("material.youngs_modulus"));
+        let mut c = base();
+        c.particles[0].radius = -1e-3;
+        let e = err_of(c);
+        assert!(
+            e.contains("particles[0].radius") && e.contains("> 0"),
+            "{e}"
+        );
+        let mut c = base();
+        c.dt = 0.0;
+        assert!(err_of(c).contains("`dt`"));
+    }
+
+    #[test]
+    fn restitution_outside_liggghts_range_is_refused() {
+        for e in [0.05, 0.0, 1.01] {
+            let mut c = base();
+            c.material.restitution = e;
+            let msg = err_of(c);
+            assert!(msg.contains("material.restitution") && msg.contains("0.05 < e <= 1"), "{msg}");
+        }
+        let mut c = base();
+        c.material.restitution = f64::INFINITY;
+        assert!(err_of(c).contains("material.restitution"));
+    }
+
+    #[test]
+    fn dt_above_rayleigh_is_refused_and_above_20_percent_warned() {
+        let c = base();
+        let rmin = c
+            .particles
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min);
+        let t_r = rayleigh_time(&c.material, rmin);
+        let mut big = c.clone();
+        big.dt = 1.01 * t_r;
+        assert!(err_of(big).contains("Rayleigh"));
+        let mut warn = c.clone();
+        warn.dt = 0.5 * t_r;
+        let v = warn.validate().unwrap();
+        assert_eq!(v.warnings.len(), 1, "{:?}", v.warnings);
+        assert!(v.warnings[0].contains("Rayleigh"));
+    }
+
+    #[test]
+    fn large_initial_overlap_is_refused() {
+        let mut c = base();
+        c.particles[1].position[2] = c.particles[0].position[2] + 0.5 * c.particles[0].radius;
+        assert!(err_of(c).contains("initial overlap"));
+    }
+
+    #[test]
+    fn names_cannot_inject_commands() {
+        let mut c = base();
+        c.name = "x\nshell rm -rf /".into();
+        assert!(err_of(c).contains("identifier"));
+        let mut c = base();
+        c.name = "a b".into();
+        assert!(err_of(c).contains("identifier"));
+        let mut c = base();
+        c.description = "ok\nshell touch /tmp/pwned".into();
+        assert!(err_of(c).contains("single line"));
+    }
+
+    #[test]
+    fn unknown_fields_and_models_are_reported() {
+        let text = include_str!("../../cases/rolling_plastic.toml")
+            .replace("rolling = \"epsd\"", "rolling = \"epsd9\"");
+        let e = CaseFile::from_toml(&text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("epsd9") && e.contains("epsd2"), "{e}");
+        let text = format!(
+            "{}\nshell = \"rm\"\n",
+            include_str!("../../cases/rolling_plastic.toml")
+        );
+        let e = CaseFile::from_toml(&text, Path::new("x.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("shell"), "{e}");
+        let e = RollingModel::parse("foo").unwrap_err().to_string();
+        assert!(e.contains("cdt, epsd, epsd2, epsd3"), "{e}");
+    }
+
+    #[test]
+    fn damping_with_undamped_model_is_refused() {
+        let mut c = base().with_rolling(RollingModel::Epsd2);
+        c.rolling_models.clear();
+        c.material.rolling_damping = 0.3;
+        let e = err_of(c);
+        assert!(e.contains("eta_r acts only in epsd and epsd3"), "{e}");
+    }
+}
