@@ -608,7 +608,10 @@ mod tests {
             let mut c = base();
             c.material.restitution = e;
             let msg = err_of(c);
-            assert!(msg.contains("material.restitution") && msg.contains("0.05 < e <= 1"), "{msg}");
+            assert!(
+                msg.contains("material.restitution") && msg.contains("0.05 < e <= 1"),
+                "{msg}"
+            );
         }
         let mut c = base();
         c.material.restitution = f64::INFINITY;

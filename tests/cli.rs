@@ -1,0 +1,279 @@
+//! The `verify` binary end to end: exit codes, outputs, and clear errors for bad input.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn verify(args: &[&str]) -> Output {
+    Command::new(common::verify_bin())
+        .args(args)
+        .output()
+        .expect("run verify")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write_case(dir: &Path, edit: impl Fn(String) -> String) -> String {
+    let text = edit(include_str!("../cases/rolling_plastic.toml").to_string());
+    let p = dir.join("case.toml");
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn contact_rolling_plastic_agrees_and_writes_outputs() {
+    common::liggghts();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        stderr(&o)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["pass"], true);
+    let results = summary["results"].as_array().unwrap();
+    assert!(!results.is_empty());
+    for key in [
+        "case",
+        "model",
+        "channel",
+        "max_abs_err",
+        "max_rel_err",
+        "rtol",
+        "pass",
+    ] {
+        assert!(
+            results[0].get(key).is_some(),
+            "summary.json result lacks {key}"
+        );
+    }
+    for model in ["cdt", "epsd", "epsd2", "epsd3"] {
+        let d = out.join(format!("rolling_plastic__{model}"));
+        for f in [
+            "liggghts.csv",
+            "native.csv",
+            "deck/in.deck",
+            "deck/data.txt",
+            "log.liggghts",
+        ] {
+            assert!(d.join(f).is_file(), "missing {}", d.join(f).display());
+        }
+    }
+}
+
+#[test]
+fn reference_mode_needs_no_liggghts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_unload",
+        "--reference",
+        "--liggghts",
+        "/nonexistent/liggghts",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+#[test]
+fn perturbed_reference_is_a_disagreement_with_exit_1() {
+    // A perturbed stored reference must make the comparison fail with exit 1.
+    let dir = tempfile::tempdir().unwrap();
+    let refdir = dir.path().join("ref");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/contact/rolling_elastic__epsd");
+    let dst = refdir.join("contact/rolling_elastic__epsd");
+    std::fs::create_dir_all(&dst).unwrap();
+    let csv = std::fs::read_to_string(src.join("liggghts.csv")).unwrap();
+    let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+    // Scale the normal force of one row by (1 + 1e-6).
+    let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
+    let v: f64 = cells[2].parse().unwrap();
+    cells[2] = format!("{:e}", v * (1.0 + 1e-6));
+    lines[20] = cells.join(",");
+    std::fs::write(dst.join("liggghts.csv"), lines.join("\n") + "\n").unwrap();
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_elastic",
+        "--rolling",
+        "epsd",
+        "--reference",
+        "--reference-dir",
+        refdir.to_str().unwrap(),
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("DISAGREE"));
+}
+
+#[test]
+fn list_names_every_case() {
+    let o = verify(&["contact", "--list"]);
+    assert_eq!(o.status.code(), Some(0));
+    let s = String::from_utf8_lossy(&o.stdout);
+    for c in dem_verify::spec::builtin_names() {
+        assert!(s.contains(c), "--list lacks {c}");
+    }
+}
+
+#[test]
+fn unknown_case_and_model_list_the_valid_ones() {
+    let o = verify(&["contact", "--case", "rolling_plastik", "--reference"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("unknown case `rolling_plastik`")
+            && stderr(&o).contains("rolling_plastic")
+    );
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--rolling",
+        "epsd4",
+        "--reference",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("epsd4") && stderr(&o).contains("epsd3"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_case_files_name_the_field_and_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&str, &str, &str); 6] = [
+        (
+            "youngs_modulus = 7.0e10",
+            "youngs_modulus = nan",
+            "material.youngs_modulus",
+        ),
+        ("radius = 0.6e-3", "radius = -0.6e-3", "particles[1].radius"),
+        ("dt = 1.0e-8", "dt = 1.0e-5", "Rayleigh"),
+        ("restitution = 0.9", "restitution = 0.01", "0.05 < e <= 1"),
+        (
+            "name = \"rolling_plastic\"",
+            "name = \"x\\nshell touch /tmp/pwned\"",
+            "identifier",
+        ),
+        (
+            "position = [0.0, 0.0, 1.599e-3]",
+            "position = [0.0, 0.0, 0.9e-3]",
+            "initial overlap",
+        ),
+    ];
+    for (from, to, expect) in cases {
+        let spec = write_case(dir.path(), |t| {
+            assert!(t.contains(from), "template lacks {from}");
+            t.replacen(from, to, 1)
+        });
+        let o = verify(&["contact", "--spec", &spec, "--reference"]);
+        assert_eq!(o.status.code(), Some(2), "{to}");
+        assert!(stderr(&o).contains(expect), "{to}: {}", stderr(&o));
+    }
+    assert!(!Path::new("/tmp/pwned").exists());
+}
+
+#[test]
+fn dt_above_twenty_percent_of_rayleigh_warns() {
+    let dir = tempfile::tempdir().unwrap();
+    // Rayleigh time of the 0.6 mm sphere is about 0.62 us; 0.2 us is about 32 %.
+    let spec = write_case(dir.path(), |t| {
+        t.replacen("dt = 1.0e-8", "dt = 2.0e-7", 1)
+            .replacen("steps = 4000", "steps = 50", 1)
+    });
+    let lig = common::liggghts();
+    let o = verify(&[
+        "contact",
+        "--spec",
+        &spec,
+        "--rolling",
+        "epsd",
+        "--liggghts",
+        lig.binary.to_str().unwrap(),
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+    ]);
+    assert!(
+        stderr(&o).contains("Rayleigh") && stderr(&o).contains("above 20 %"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+#[test]
+fn missing_liggghts_says_how_to_install() {
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--liggghts",
+        "/nonexistent/liggghts",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("apt-get install -y liggghts") && e.contains("--reference"),
+        "{e}"
+    );
+}
+
+#[test]
+fn failing_liggghts_run_shows_the_log_tail() {
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("liggghts");
+    std::fs::write(
+        &fake,
+        "#!/bin/sh\necho 'LIGGGHTS (fake)' > log.liggghts\necho 'ERROR: Lost atoms: original 2 current 1' >> log.liggghts\nexit 1\n",
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--rolling",
+        "epsd",
+        "--liggghts",
+        fake.to_str().unwrap(),
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("LIGGGHTS run failed") && e.contains("ERROR: Lost atoms"),
+        "{e}"
+    );
+}

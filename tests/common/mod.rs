@@ -1,0 +1,19 @@
+//! Helpers shared by the end-to-end tests.
+#![allow(dead_code)]
+
+use dem_verify::liggghts::Liggghts;
+use std::time::Duration;
+
+/// The LIGGGHTS binary. Tests that need it fail (never skip) when it is missing: CI installs
+/// it, and a developer without it is told how to get it.
+pub fn liggghts() -> Liggghts {
+    match Liggghts::locate(None, Duration::from_secs(600)) {
+        Ok(l) => l,
+        Err(e) => panic!("this test runs LIGGGHTS and it is not installed: {e}"),
+    }
+}
+
+/// Path of the `verify` binary built for the tests.
+pub fn verify_bin() -> &'static str {
+    env!("CARGO_BIN_EXE_verify")
+}

@@ -1,0 +1,87 @@
+//! The native solver against the stored LIGGGHTS outputs (no LIGGGHTS needed), and the
+//! committed decks against the generator.
+
+use dem_verify::cli::{contact_runs, write_decks};
+use dem_verify::compare::{compare, CONTACT_RTOL};
+use dem_verify::deck::run_name;
+use dem_verify::series::{contact_series, Series};
+use dem_verify::solver::two_body;
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[test]
+fn native_matches_stored_reference_for_every_case() {
+    for case in contact_runs("all", None, "all").unwrap() {
+        let name = run_name(&case);
+        let stored = Series::read_csv(
+            &root()
+                .join("reference/contact")
+                .join(&name)
+                .join("liggghts.csv"),
+        )
+        .unwrap();
+        let native = contact_series(&case, &two_body::run(&case).unwrap())
+            .at_steps(&stored.steps)
+            .unwrap();
+        for r in compare(
+            &case.name,
+            case.models.rolling.keyword(),
+            &stored,
+            &native,
+            CONTACT_RTOL,
+        )
+        .unwrap()
+        {
+            assert!(r.pass, "{name}: {} rel err {:e}", r.channel, r.max_rel_err);
+        }
+        assert!(root()
+            .join("reference/contact")
+            .join(&name)
+            .join("provenance.json")
+            .is_file());
+    }
+}
+
+/// The committed decks under liggghts_inputs/ are what the generator writes now. Re-bless
+/// deliberately with `verify decks` (or UPDATE_GOLDEN=1) and review the diff.
+#[test]
+fn committed_decks_match_the_generator() {
+    let committed = root().join("liggghts_inputs");
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        write_decks(&committed).unwrap();
+    }
+    let fresh = tempfile::tempdir().unwrap();
+    let n = write_decks(fresh.path()).unwrap();
+    let mut compared = 0;
+    for entry in walk(&fresh.path().join("contact")) {
+        let rel = entry.strip_prefix(fresh.path()).unwrap();
+        let old = std::fs::read_to_string(committed.join(rel))
+            .unwrap_or_else(|_| panic!("{} is not committed; run `verify decks`", rel.display()));
+        let new = std::fs::read_to_string(&entry).unwrap();
+        assert_eq!(
+            old,
+            new,
+            "{} differs from the generator; run `verify decks` and review",
+            rel.display()
+        );
+        compared += 1;
+    }
+    assert!(compared >= 2 * n, "compared {compared} files for {n} decks");
+}
+
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}
