@@ -7,6 +7,8 @@
 //! - normal_damped: the restitution the damping was built for;
 //! - tangential cases: the spring obeys the Coulomb limit, |Ft| = mu_p Fn only when sliding.
 
+#![allow(clippy::needless_range_loop)]
+
 use dem_verify::cli::contact_runs;
 use dem_verify::deck::run_name;
 use dem_verify::series::{contact_series, Series};
