@@ -32,7 +32,8 @@ pub enum Outcome {
         verify contact --reference                     # against stored LIGGGHTS outputs, no LIGGGHTS needed\n  \
         verify contact --spec my_case.toml --rolling epsd2\n  \
         verify contact --list\n  \
-        verify decks                                   # regenerate liggghts_inputs/\n\n\
+        verify decks                                   # regenerate liggghts_inputs/\n  \
+        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n\n\
         Exit status: 0 agree, 1 disagree, 2 error."
 )]
 pub struct Cli {
@@ -44,6 +45,8 @@ pub struct Cli {
 pub enum Command {
     /// Two-particle (and particle-wall) contact histories: native vs LIGGGHTS, channel by channel.
     Contact(ContactArgs),
+    /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
+    Shear(crate::cli_shear::ShearArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
     Decks {
         #[arg(long, default_value = "liggghts_inputs")]
@@ -92,6 +95,7 @@ pub struct ContactArgs {
 pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Contact(a) => contact(a),
+        Command::Shear(a) => crate::cli_shear::shear(a),
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());

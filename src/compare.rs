@@ -137,3 +137,213 @@ mod tests {
         assert!(compare("c", "m", &a, &b, 1e-9).is_err());
     }
 }
+
+/// Relative agreement that defines the lockstep horizon (per channel, against its peak).
+pub const LOCKSTEP_RTOL: f64 = 1e-6;
+/// Largest |delta mu| of the steady friction coefficients for a pass.
+pub const MU_ATOL: f64 = 0.02;
+/// Largest relative deviation of the mean normal stress from its target for a pass.
+pub const STRESS_RTOL: f64 = 0.01;
+
+/// How long two runs from the same initial state agree.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Horizon {
+    /// Last output step at which every compared channel agrees within `rtol` of its peak.
+    pub last_agree_step: u64,
+    /// First output step and channel where they do not (None: agreement to the end).
+    pub first_diverge_step: Option<u64>,
+    pub first_diverge_channel: Option<String>,
+    pub rtol: f64,
+}
+
+/// Lockstep comparison of `channels` (vector channels by base name) over common steps.
+pub fn lockstep(a: &Series, b: &Series, channels: &[&str], rtol: f64) -> Horizon {
+    let chans: Vec<_> = a
+        .channels()
+        .into_iter()
+        .filter(|c| channels.contains(&c.name.as_str()))
+        .collect();
+    let n = a.rows.len().min(b.rows.len());
+    let peaks: Vec<f64> = chans
+        .iter()
+        .map(|ch| {
+            (0..n)
+                .map(|k| {
+                    let na: f64 = ch
+                        .cols
+                        .iter()
+                        .map(|&c| a.rows[k][c].powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    let nb: f64 = ch
+                        .cols
+                        .iter()
+                        .map(|&c| b.rows[k][c].powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    na.max(nb)
+                })
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    let mut last = a.steps.first().copied().unwrap_or(0);
+    for k in 0..n {
+        if a.steps[k] != b.steps[k] {
+            break;
+        }
+        for (ch, peak) in chans.iter().zip(&peaks) {
+            let worst = ch
+                .cols
+                .iter()
+                .map(|&c| (a.rows[k][c] - b.rows[k][c]).abs())
+                .fold(0.0, f64::max);
+            // NaN compares false: a NaN difference is a divergence
+            if worst.is_nan() || worst > rtol * peak {
+                return Horizon {
+                    last_agree_step: last,
+                    first_diverge_step: Some(a.steps[k]),
+                    first_diverge_channel: Some(ch.name.clone()),
+                    rtol,
+                };
+            }
+        }
+        last = a.steps[k];
+    }
+    Horizon {
+        last_agree_step: last,
+        first_diverge_step: None,
+        first_diverge_channel: None,
+        rtol,
+    }
+}
+
+/// Two-sided 95 % Student t quantile for `dof` degrees of freedom.
+pub fn t95(dof: usize) -> f64 {
+    const T: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
+    ];
+    match dof {
+        0 => f64::INFINITY,
+        d if d <= 30 => T[d - 1],
+        _ => 1.96,
+    }
+}
+
+/// Mean and 95 % confidence half-width of samples (t distribution).
+pub fn mean_ci95(x: &[f64]) -> (f64, f64) {
+    let n = x.len();
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    if n == 1 {
+        return (mean, f64::INFINITY);
+    }
+    let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    (mean, t95(n - 1) * (var / n as f64).sqrt())
+}
+
+/// Steady-state figures of one code over its seeds.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Steady {
+    /// Mean mu over the steady window, per seed.
+    pub per_seed_mu: Vec<f64>,
+    /// Mean over seeds and its 95 % CI half-width (over seeds; with one seed, from 10 block
+    /// means of the window).
+    pub mu: f64,
+    pub mu_ci95: f64,
+    /// Mean normal stress on the top plate in the window [Pa], per seed.
+    pub per_seed_stress: Vec<f64>,
+}
+
+/// Steady window rule: the second half (by steps) of the last shear stage.
+pub fn steady_window(stage_start: u64, stage_end: u64) -> (u64, u64) {
+    (stage_start + (stage_end - stage_start) / 2, stage_end)
+}
+
+/// Steady-state figures from one series per seed; `area` converts force to stress.
+pub fn steady(series: &[Series], window: (u64, u64), area: f64) -> Steady {
+    let mut per_seed_mu = Vec::new();
+    let mut per_seed_stress = Vec::new();
+    let mut blocks_single = Vec::new();
+    for s in series {
+        let (cmu, cfy) = (
+            s.col("mu[-]").expect("mu column"),
+            s.col("top_f_y[N]").expect("force column"),
+        );
+        let rows: Vec<&Vec<f64>> = s
+            .steps
+            .iter()
+            .zip(&s.rows)
+            .filter(|(st, _)| **st > window.0 && **st <= window.1)
+            .map(|(_, r)| r)
+            .collect();
+        let mu: Vec<f64> = rows.iter().map(|r| r[cmu]).collect();
+        let (m, _) = mean_ci95(&mu);
+        per_seed_mu.push(m);
+        per_seed_stress
+            .push(rows.iter().map(|r| r[cfy]).sum::<f64>() / rows.len().max(1) as f64 / area);
+        if series.len() == 1 {
+            let nb = 10.min(mu.len());
+            blocks_single = (0..nb)
+                .map(|b| {
+                    let chunk = &mu[b * mu.len() / nb..(b + 1) * mu.len() / nb];
+                    chunk.iter().sum::<f64>() / chunk.len().max(1) as f64
+                })
+                .collect();
+        }
+    }
+    let (mu, mu_ci95) = if series.len() == 1 {
+        (per_seed_mu[0], mean_ci95(&blocks_single).1)
+    } else {
+        mean_ci95(&per_seed_mu)
+    };
+    Steady {
+        per_seed_mu,
+        mu,
+        mu_ci95,
+        per_seed_stress,
+    }
+}
+
+#[cfg(test)]
+mod shear_tests {
+    use super::*;
+
+    fn s(vals: &[f64]) -> Series {
+        Series {
+            columns: vec!["top_f_x[N]".into(), "top_f_y[N]".into(), "mu[-]".into()],
+            steps: (0..vals.len() as u64).map(|k| k * 10).collect(),
+            rows: vals.iter().map(|v| vec![*v, 10.0, v / 10.0]).collect(),
+        }
+    }
+
+    #[test]
+    fn horizon_names_first_divergence() {
+        let a = s(&[1.0, 2.0, 3.0, 4.0]);
+        let mut b = a.clone();
+        b.rows[2][0] = 3.1;
+        b.rows[2][2] = 0.31;
+        let h = lockstep(&a, &b, &["top_f"], 1e-6);
+        assert_eq!(h.last_agree_step, 10);
+        assert_eq!(h.first_diverge_step, Some(20));
+        assert_eq!(h.first_diverge_channel.as_deref(), Some("top_f"));
+        assert_eq!(lockstep(&a, &a, &["top_f"], 1e-6).first_diverge_step, None);
+    }
+
+    #[test]
+    fn steady_mean_and_ci() {
+        let (m, ci) = mean_ci95(&[1.0, 2.0, 3.0]);
+        assert_eq!(m, 2.0);
+        assert!((ci - 4.303 * (1.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        let st = steady(
+            &[s(&[1.0, 2.0, 3.0, 4.0]), s(&[2.0, 2.0, 2.0, 2.0])],
+            steady_window(0, 30),
+            10.0,
+        );
+        assert_eq!(st.per_seed_mu, vec![0.35, 0.2]);
+        assert_eq!(st.per_seed_stress, vec![1.0, 1.0]);
+    }
+}

@@ -8,13 +8,16 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod cli;
+pub mod cli_shear;
 pub mod compare;
 pub mod deck;
 pub mod error;
 pub mod fsutil;
 pub mod liggghts;
+pub mod packing;
 pub mod report;
 pub mod series;
+pub mod shear;
 pub mod solver;
 pub mod spec;
 

@@ -62,6 +62,17 @@ impl Liggghts {
 
     /// Writes `deck` into `dir` and runs it there. On failure returns the log tail.
     pub fn run(&self, deck: &Deck, dir: &Path) -> Result<()> {
+        self.run_with_progress(deck, dir, |_| {})
+    }
+
+    /// As [`Liggghts::run`], calling `poll` with the run directory about every 0.5 s while
+    /// LIGGGHTS runs (for progress reports).
+    pub fn run_with_progress(
+        &self,
+        deck: &Deck,
+        dir: &Path,
+        mut poll: impl FnMut(&Path),
+    ) -> Result<()> {
         for (name, text) in &deck.files {
             let p = dir.join(name);
             std::fs::write(&p, text).map_err(|e| Error::io(&p, e))?;
@@ -79,7 +90,12 @@ impl Liggghts {
             .spawn()
             .map_err(|e| Error::io(&self.binary, e))?;
         let start = Instant::now();
+        let mut last_poll = Instant::now();
         let status = loop {
+            if last_poll.elapsed() > Duration::from_millis(500) {
+                poll(dir);
+                last_poll = Instant::now();
+            }
             if let Some(s) = child.try_wait().map_err(|e| Error::io(&self.binary, e))? {
                 break s;
             }
@@ -227,4 +243,69 @@ pub fn read_contact_frames(dir: &Path, n_hist: usize, is_wall: bool) -> Result<V
         frames.push(fr);
     }
     Ok(frames)
+}
+
+/// Thermo rows of a LIGGGHTS log: (step, values) for every row with `ncol` values after the
+/// step, keeping the first row of each step (a new `run` repeats the last step, with the
+/// mesh force accumulated twice during setup).
+pub fn read_thermo(log: &Path, ncol: usize) -> Result<Vec<(u64, Vec<f64>)>> {
+    let text = read_to_string(log)?;
+    Ok(parse_thermo(&text, ncol))
+}
+
+/// See [`read_thermo`].
+pub fn parse_thermo(text: &str, ncol: usize) -> Vec<(u64, Vec<f64>)> {
+    let mut rows: Vec<(u64, Vec<f64>)> = Vec::new();
+    let mut in_table = false;
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with("Step ") {
+            in_table = true;
+            continue;
+        }
+        if !in_table {
+            continue;
+        }
+        let mut it = t.split_whitespace();
+        let Some(step) = it.next().and_then(|s| s.parse::<u64>().ok()) else {
+            in_table = false;
+            continue;
+        };
+        let vals: Vec<f64> = it.filter_map(|s| s.parse().ok()).collect();
+        if vals.len() != ncol {
+            in_table = false;
+            continue;
+        }
+        if rows.last().is_some_and(|(s, _)| *s >= step) {
+            continue;
+        }
+        rows.push((step, vals));
+    }
+    rows
+}
+
+/// The last thermo step written so far (for progress), if any.
+pub fn last_thermo_step(log: &Path, ncol: usize) -> Option<u64> {
+    let text = std::fs::read_to_string(log).ok()?;
+    parse_thermo(&text, ncol).last().map(|r| r.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thermo_keeps_first_row_of_each_step() {
+        let log =
+            "Step a b\n 0 1 2\n 100 3 4\nLoop time of 1\nStep a b\n 100 6 8\n 200 5 6\nLoop time\n";
+        let r = parse_thermo(log, 2);
+        assert_eq!(
+            r,
+            vec![
+                (0, vec![1.0, 2.0]),
+                (100, vec![3.0, 4.0]),
+                (200, vec![5.0, 6.0])
+            ]
+        );
+    }
 }

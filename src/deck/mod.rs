@@ -6,6 +6,8 @@
 //! fixed text chosen by enums. A test feeds hostile strings through the case and checks the
 //! deck.
 
+pub mod shear;
+
 use crate::solver::kinematics::rotation_period;
 use crate::solver::two_body::contact_skin;
 use crate::spec::{domain_half_size, Case, Motion, RollingModel};

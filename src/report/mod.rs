@@ -1,4 +1,8 @@
-//! Verdicts to people: a terminal table and `summary.json`.
+//! Verdicts to people: terminal tables, `summary.json`, SVG plots, VTK snapshots, progress.
+
+pub mod plot;
+pub mod progress;
+pub mod vtk;
 
 use crate::compare::ChannelResult;
 use crate::error::Result;

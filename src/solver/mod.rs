@@ -7,6 +7,8 @@ pub mod integrate;
 pub mod kinematics;
 pub mod material;
 pub mod mesh;
+pub mod shear;
+pub mod trimesh;
 pub mod two_body;
 pub mod vec3;
 

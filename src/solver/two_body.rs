@@ -221,7 +221,8 @@ impl<'a> Sim<'a> {
         })
     }
 
-    /// Neighbour build: a pair beyond `radsum + skin` leaves the list and loses its history.
+    /// Neighbour build (neigh_gran.cpp): a pair beyond `radsum + skin` leaves the list; a
+    /// listed pair keeps its history only if it is touching at the build.
     fn build_neighbors(&mut self) {
         self.xhold = self.bodies.iter().map(|b| b.s.x).collect();
         if self.bodies.len() == 2 {
@@ -233,9 +234,10 @@ impl<'a> Sim<'a> {
             ];
             let rsq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
             let cut = a.radius + b.radius + self.skin;
+            let radsum = a.radius + b.radius;
             if rsq > cut * cut {
                 self.pair_hist = None;
-            } else if self.pair_hist.is_none() {
+            } else if self.pair_hist.is_none() || rsq >= radsum * radsum {
                 self.pair_hist = Some(ContactHistory::default());
             }
         }

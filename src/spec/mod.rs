@@ -7,6 +7,7 @@
 //! names are identifiers, every number is finite and in range.
 
 mod builtin;
+pub mod shear;
 mod stability;
 
 pub use builtin::{builtin_case, builtin_names, BUILTIN_CASES};

@@ -11,9 +11,9 @@
 //! History lifetime (found in the LIGGGHTS sources, mirrored by the time loops):
 //! - particle-particle: pair_gran_base.h calls `surfacesClose` (which zeroes the history) only
 //!   for pairs within `contactDistanceFactor * radsum`; with the default factor 1 it is never
-//!   called, so the history of a pair that separates is *kept* until a neighbour-list rebuild
-//!   finds the pair beyond the neighbour cutoff `radsum + skin` (fix_contact_history.cpp copies
-//!   only pairs in the list whose contact flag is set; neigh_gran.cpp restores them).
+//!   called, so the history of a pair that separates is *kept* until the next neighbour-list
+//!   rebuild, which restores it only for pairs touching at that moment (neigh_gran.cpp:
+//!   `rsq < radsum*radsum`, else zero history and contact flag 0).
 //! - particle-wall (mesh): fix_wall_gran.cpp marks all contacts, `handleContact` keeps only the
 //!   intersecting ones, `cleanUpContacts` deletes the rest: the history ends with the contact.
 //! - During `setup` of every `run` (Verlet::setup), forces are computed with `shearupdate = 0`:

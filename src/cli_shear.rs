@@ -1,0 +1,560 @@
+//! `verify shear`: the paper's shear experiment in LIGGGHTS and natively from one case and
+//! one initial packing per seed, compared in lockstep and at steady state.
+
+use crate::cli::{utc_stamp, Outcome};
+use crate::compare::{
+    lockstep, steady, steady_window, Horizon, Steady, LOCKSTEP_RTOL, MU_ATOL, STRESS_RTOL,
+};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::liggghts::Liggghts;
+use crate::packing::loose_packing;
+use crate::report::plot::{line_plot, Curve};
+use crate::report::progress::Progress;
+use crate::series::Series;
+use crate::shear::{run_ends, run_liggghts, run_native, write_packing, CodeRun, Row};
+use crate::spec::shear::{ShearCase, Stage};
+use crate::spec::RollingModel;
+use clap::Args;
+use indicatif::MultiProgress;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+#[derive(Args, Debug, Clone)]
+pub struct ShearArgs {
+    /// Rolling friction coefficient mu_r.
+    #[arg(long, default_value_t = 0.0)]
+    pub mu_r: f64,
+    /// Rolling viscous damping eta_r (epsd and epsd3 only).
+    #[arg(long, default_value_t = 0.0)]
+    pub eta_r: f64,
+    /// Rolling model (the paper's: epsd).
+    #[arg(long, default_value = "epsd")]
+    pub rolling: String,
+    /// Preset: ci (few hundred particles, minutes), fast (paper box, nightly), paper.
+    #[arg(long, default_value = "fast")]
+    pub preset: String,
+    /// Number of seeds (initial packings).
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// Shear speeds [m/s], comma separated (replaces the preset's stages).
+    #[arg(long, value_delimiter = ',')]
+    pub speeds: Option<Vec<f64>>,
+    /// Shear strain of each stage (replaces the preset's).
+    #[arg(long)]
+    pub strain: Option<f64>,
+    /// Threads of the native solver (default: all cores, minus one while LIGGGHTS runs).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output directory (default: a new directory under ./runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run only the native solver.
+    #[arg(long, conflicts_with = "liggghts_only")]
+    pub native_only: bool,
+    /// Run only LIGGGHTS.
+    #[arg(long)]
+    pub liggghts_only: bool,
+    /// Allow stages with inertial number I > 1e-3.
+    #[arg(long)]
+    pub allow_inertial: bool,
+    /// LIGGGHTS binary.
+    #[arg(long)]
+    pub liggghts: Option<PathBuf>,
+    /// Timeout of one LIGGGHTS run [s].
+    #[arg(long, default_value_t = 7 * 24 * 3600)]
+    pub timeout: u64,
+}
+
+/// The validated case of one seed.
+pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> {
+    let rolling = RollingModel::parse(&a.rolling)?;
+    if rolling == RollingModel::Off && a.mu_r > 0.0 {
+        return Err(Error::invalid("--mu-r", a.mu_r, "0 with --rolling off"));
+    }
+    let mut c = ShearCase::preset(&a.preset, rolling, a.mu_r, a.eta_r, seed)?;
+    if let Some(speeds) = &a.speeds {
+        let strain = a.strain.unwrap_or(c.stages[0].strain);
+        c.stages = speeds
+            .iter()
+            .map(|&speed| Stage { speed, strain })
+            .collect();
+    } else if let Some(strain) = a.strain {
+        for s in &mut c.stages {
+            s.strain = strain;
+        }
+    }
+    let w = c.validate(a.allow_inertial)?;
+    Ok((c, w))
+}
+
+/// What is kept per seed and code so that an interrupted `verify shear` resumes.
+#[derive(Serialize, Deserialize)]
+struct RunRecord {
+    case: String,
+    wall_time: f64,
+    steps: u64,
+}
+
+fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
+    let rec: RunRecord =
+        serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{code}_run.json"))).ok()?)
+            .ok()?;
+    if rec.case != serde_json::to_string(case).ok()? {
+        return None;
+    }
+    let s = Series::read_csv(&dir.join(format!("{code}.csv"))).ok()?;
+    let col = |h: &str| s.col(h);
+    let cols: Vec<usize> = [
+        "top_f_x[N]",
+        "top_f_y[N]",
+        "top_f_z[N]",
+        "bottom_f_x[N]",
+        "bottom_f_y[N]",
+        "bottom_f_z[N]",
+        "top_y[m]",
+        "ke[J]",
+        "erot[J]",
+    ]
+    .iter()
+    .map(|h| col(h))
+    .collect::<Option<_>>()?;
+    let rows: Vec<Row> = s
+        .steps
+        .iter()
+        .zip(&s.rows)
+        .map(|(st, r)| {
+            let mut v = [0.0; 9];
+            for (k, &c) in cols.iter().enumerate() {
+                v[k] = r[c];
+            }
+            (*st, v)
+        })
+        .collect();
+    Some(CodeRun {
+        rows,
+        wall_time: rec.wall_time,
+        steps: rec.steps,
+    })
+}
+
+fn store(dir: &Path, code: &str, case: &ShearCase, run: &CodeRun) -> Result<Series> {
+    let s = crate::shear::write_series(case, run, &dir.join(format!("{code}.csv")))?;
+    let rec = RunRecord {
+        case: serde_json::to_string(case)?,
+        wall_time: run.wall_time,
+        steps: run.steps,
+    };
+    write_atomic(
+        &dir.join(format!("{code}_run.json")),
+        serde_json::to_string_pretty(&rec)?.as_bytes(),
+    )?;
+    Ok(s)
+}
+
+/// Per-seed outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct SeedResult {
+    pub seed: u64,
+    pub horizon: Option<Horizon>,
+    /// Steps of compression, and steps of shear the codes agreed for.
+    pub compression_steps: u64,
+    pub shear_steps_agreed: Option<u64>,
+    pub liggghts_wall_s: Option<f64>,
+    pub native_wall_s: Option<f64>,
+    pub liggghts_particle_steps_per_s: Option<f64>,
+    pub native_particle_steps_per_s: Option<f64>,
+}
+
+/// `summary.json` of `verify shear`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShearSummary {
+    pub pass: bool,
+    pub preset: String,
+    pub rolling: String,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    pub particles: usize,
+    pub dt: f64,
+    pub inertial_numbers: Vec<f64>,
+    pub kappa: f64,
+    pub steady_window_steps: (u64, u64),
+    pub liggghts: Option<Steady>,
+    pub native: Option<Steady>,
+    pub seeds: Vec<SeedResult>,
+    pub results: Vec<crate::compare::ChannelResult>,
+    pub liggghts_version: String,
+    pub date_utc: String,
+}
+
+pub fn shear(a: ShearArgs) -> Result<Outcome> {
+    if a.seeds == 0 || a.seeds > 1000 {
+        return Err(Error::invalid("--seeds", a.seeds, "1 ..= 1000"));
+    }
+    let cases: Vec<(ShearCase, Vec<String>)> = (1..=a.seeds)
+        .map(|s| shear_case(&a, s))
+        .collect::<Result<_>>()?;
+    let case0 = &cases[0].0;
+    let run_lig = !a.native_only;
+    let run_nat = !a.liggghts_only;
+    let lig = if run_lig {
+        Some(Liggghts::locate(
+            a.liggghts.as_deref(),
+            Duration::from_secs(a.timeout),
+        )?)
+    } else {
+        None
+    };
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from("runs").join(format!("shear-{}-{}", a.preset, utc_stamp()))
+    });
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    let threads = a
+        .threads
+        .unwrap_or(if run_lig { (cores - 1).max(1) } else { cores });
+    if threads == 0 {
+        return Err(Error::invalid("--threads", 0, ">= 1"));
+    }
+    let inertial: Vec<f64> = (0..case0.stages.len())
+        .map(|k| case0.inertial_number(k))
+        .collect();
+    println!(
+        "verify shear: preset {}, {} particles, rolling {} (mu_r {}, eta_r {}), {} seed(s), dt {:e} s, {} steps per seed",
+        a.preset,
+        case0.particles,
+        case0.models.rolling,
+        a.mu_r,
+        a.eta_r,
+        a.seeds,
+        case0.dt,
+        case0.total_steps()
+    );
+    println!(
+        "  inertial number I = {}; contact stiffness number kappa = {:.0}; native threads {threads}; output {}",
+        inertial.iter().map(|i| format!("{i:.2e}")).collect::<Vec<_>>().join(", "),
+        case0.kappa(),
+        out.display()
+    );
+    for w in &cases[0].1 {
+        eprintln!("warning: {w}");
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::invalid("--threads", threads, e.to_string()))?;
+    let ends = run_ends(case0);
+    let window = steady_window(ends[ends.len() - 2], ends[ends.len() - 1]);
+    let (mut lig_series, mut nat_series) = (Vec::new(), Vec::new());
+    let mut seeds = Vec::new();
+    for (case, _) in &cases {
+        let dir = out.join(format!("seed{}", case.seed));
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        write_atomic(
+            &dir.join("case.toml"),
+            toml::to_string(case)
+                .map_err(|e| Error::invalid("case", "", e.to_string()))?
+                .as_bytes(),
+        )?;
+        let packing = loose_packing(case);
+        write_packing(&packing, &dir.join("initial_packing.csv"))?;
+        let multi = MultiProgress::new();
+        let total = case.total_steps();
+        let (lr, nr) = std::thread::scope(|sc| {
+            let lh = match (&lig, cached(&dir, "liggghts", case)) {
+                (_, Some(c)) if run_lig => {
+                    println!("  seed {}: LIGGGHTS result found, reused", case.seed);
+                    Some(sc.spawn(move || Ok(c)))
+                }
+                (Some(l), _) => {
+                    let p =
+                        Progress::new(&multi, &format!("LIGGGHTS s{}", case.seed), total, case.dt);
+                    let (packing, dir) = (&packing, &dir);
+                    Some(sc.spawn(move || run_liggghts(case, packing, l, dir, &p)))
+                }
+                _ => None,
+            };
+            let nr = if run_nat {
+                Some(match cached(&dir, "native", case) {
+                    Some(c) => {
+                        println!("  seed {}: native result found, reused", case.seed);
+                        Ok(c)
+                    }
+                    None => {
+                        let p = Progress::new(
+                            &multi,
+                            &format!("native s{}", case.seed),
+                            total,
+                            case.dt,
+                        );
+                        pool.install(|| run_native(case, &packing, &dir, &p))
+                    }
+                })
+            } else {
+                None
+            };
+            (lh.map(|h| h.join().expect("LIGGGHTS thread")), nr)
+        });
+        let lr = lr.transpose()?;
+        let nr = nr.transpose()?;
+        let ls = lr
+            .as_ref()
+            .map(|r| store(&dir, "liggghts", case, r))
+            .transpose()?;
+        let ns = nr
+            .as_ref()
+            .map(|r| store(&dir, "native", case, r))
+            .transpose()?;
+        let horizon = match (&ls, &ns) {
+            (Some(l), Some(n)) => Some(lockstep(
+                l,
+                n,
+                &["top_f", "bottom_f", "top_y"],
+                LOCKSTEP_RTOL,
+            )),
+            _ => None,
+        };
+        let sr = SeedResult {
+            seed: case.seed,
+            compression_steps: case.compression_steps,
+            shear_steps_agreed: horizon
+                .as_ref()
+                .map(|h| h.last_agree_step.saturating_sub(case.compression_steps)),
+            horizon,
+            liggghts_wall_s: lr.as_ref().map(|r| r.wall_time),
+            native_wall_s: nr.as_ref().map(|r| r.wall_time),
+            liggghts_particle_steps_per_s: lr.as_ref().map(|r| r.throughput(case.particles)),
+            native_particle_steps_per_s: nr.as_ref().map(|r| r.throughput(case.particles)),
+        };
+        print_seed(&sr);
+        seeds.push(sr);
+        lig_series.extend(ls);
+        nat_series.extend(ns);
+    }
+    let area = case0.box_x * case0.box_z;
+    let ls = (!lig_series.is_empty()).then(|| steady(&lig_series, window, area));
+    let ns = (!nat_series.is_empty()).then(|| steady(&nat_series, window, area));
+    let mut results = Vec::new();
+    let label = format!("shear_{}", a.preset);
+    let model = case0.models.rolling.keyword().to_string();
+    let target = case0.normal_stress;
+    for (code, st) in [("liggghts", &ls), ("native", &ns)] {
+        if let Some(st) = st {
+            let worst = st
+                .per_seed_stress
+                .iter()
+                .map(|s| (s / target - 1.0).abs())
+                .fold(0.0, f64::max);
+            results.push(crate::compare::ChannelResult {
+                case: label.clone(),
+                model: model.clone(),
+                channel: format!("normal_stress_{code}"),
+                unit: "Pa".into(),
+                max_abs_err: worst * target,
+                max_rel_err: worst,
+                peak: target,
+                worst_step: window.1,
+                rtol: STRESS_RTOL,
+                pass: worst <= STRESS_RTOL,
+            });
+        }
+    }
+    if let (Some(l), Some(n)) = (&ls, &ns) {
+        let dmu = (l.mu - n.mu).abs();
+        let overlap = dmu <= l.mu_ci95 + n.mu_ci95;
+        results.push(crate::compare::ChannelResult {
+            case: label.clone(),
+            model: model.clone(),
+            channel: "mu_steady".into(),
+            unit: "-".into(),
+            max_abs_err: dmu,
+            max_rel_err: dmu / l.mu.abs().max(1e-12),
+            peak: l.mu.abs().max(n.mu.abs()),
+            worst_step: window.1,
+            rtol: MU_ATOL,
+            pass: dmu <= MU_ATOL && overlap,
+        });
+    }
+    plots(&out, &lig_series, &nat_series)?;
+    let summary = ShearSummary {
+        pass: results.iter().all(|r| r.pass) && !results.is_empty(),
+        preset: a.preset.clone(),
+        rolling: model,
+        mu_r: a.mu_r,
+        eta_r: a.eta_r,
+        particles: case0.particles,
+        dt: case0.dt,
+        inertial_numbers: inertial,
+        kappa: case0.kappa(),
+        steady_window_steps: window,
+        liggghts: ls.clone(),
+        native: ns.clone(),
+        seeds,
+        results,
+        liggghts_version: lig
+            .as_ref()
+            .map(|l| l.version())
+            .unwrap_or_else(|| "not run".into()),
+        date_utc: utc_stamp(),
+    };
+    write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!();
+    println!(
+        "steady window: steps {}..{} (second half of the last stage)",
+        window.0, window.1
+    );
+    for (code, st) in [("LIGGGHTS", &ls), ("native", &ns)] {
+        if let Some(st) = st {
+            println!(
+                "  {code:<8} mu = {:.4} +- {:.4} (95 % CI)  per seed [{}]  normal stress [{}] MPa",
+                st.mu,
+                st.mu_ci95,
+                st.per_seed_mu
+                    .iter()
+                    .map(|m| format!("{m:.4}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                st.per_seed_stress
+                    .iter()
+                    .map(|s| format!("{:.3}", s / 1e6))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
+    for r in &summary.results {
+        println!(
+            "  {:<22} {:>10.4e} (limit {:.2e} {})  {}",
+            r.channel,
+            if r.channel == "mu_steady" {
+                r.max_abs_err
+            } else {
+                r.max_rel_err
+            },
+            r.rtol,
+            if r.channel == "mu_steady" {
+                "abs, CIs must overlap"
+            } else {
+                "rel"
+            },
+            if r.pass { "ok" } else { "FAIL" }
+        );
+    }
+    println!(
+        "plots: {}  summary: {}",
+        out.join("mu_strain.svg").display(),
+        out.join("summary.json").display()
+    );
+    if summary.results.is_empty() {
+        return Ok(Outcome::Agree);
+    }
+    Ok(if summary.pass {
+        Outcome::Agree
+    } else {
+        Outcome::Disagree
+    })
+}
+
+fn print_seed(s: &SeedResult) {
+    let mut line = format!("  seed {}:", s.seed);
+    if let Some(w) = s.liggghts_wall_s {
+        line += &format!(
+            " LIGGGHTS {w:.1} s ({:.3e} particle-steps/s)",
+            s.liggghts_particle_steps_per_s.unwrap_or(0.0)
+        );
+    }
+    if let Some(w) = s.native_wall_s {
+        line += &format!(
+            " native {w:.1} s ({:.3e} particle-steps/s)",
+            s.native_particle_steps_per_s.unwrap_or(0.0)
+        );
+    }
+    println!("{line}");
+    if let Some(h) = &s.horizon {
+        match (&h.first_diverge_step, &h.first_diverge_channel) {
+            (Some(st), Some(ch)) => println!(
+                "    lockstep: agree (rel {:.0e}) through step {} (compression {} steps, shear steps agreed {}); first divergence: {ch} at step {st}",
+                h.rtol,
+                h.last_agree_step,
+                s.compression_steps,
+                s.shear_steps_agreed.unwrap_or(0)
+            ),
+            _ => println!("    lockstep: agree (rel {:.0e}) through the whole run (step {})", h.rtol, h.last_agree_step),
+        }
+    }
+}
+
+fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
+    let xy = |s: &Series, x: &str, y: &str| -> Vec<(f64, f64)> {
+        let (cx, cy) = (s.col(x).expect("column"), s.col(y).expect("column"));
+        s.rows.iter().map(|r| (r[cx], r[cy])).collect()
+    };
+    let mut data = Vec::new();
+    for (k, s) in lig.iter().enumerate() {
+        data.push((format!("LIGGGHTS seed {}", k + 1), 0usize, s));
+    }
+    for (k, s) in nat.iter().enumerate() {
+        data.push((format!("native seed {}", k + 1), 1usize, s));
+    }
+    for (file, title, x, xd, y, yd) in [
+        (
+            "mu_strain.svg",
+            "friction coefficient mu = Fx / Fy on the top plate",
+            "strain[-]",
+            "shear strain",
+            "mu[-]",
+            "mu",
+        ),
+        (
+            "top_force.svg",
+            "normal force on the top plate",
+            "time[s]",
+            "time [s]",
+            "top_f_y[N]",
+            "Fy [N]",
+        ),
+        (
+            "height.svg",
+            "sample height",
+            "time[s]",
+            "time [s]",
+            "height[m]",
+            "height [m]",
+        ),
+        (
+            "kinetic_energy.svg",
+            "rotational kinetic energy",
+            "time[s]",
+            "time [s]",
+            "erot[J]",
+            "E_rot [J]",
+        ),
+    ] {
+        type Labelled = (String, usize, Vec<(f64, f64)>);
+        let pts: Vec<Labelled> = data
+            .iter()
+            .map(|(l, c, s)| {
+                let mut p = xy(s, x, y);
+                if x == "strain[-]" {
+                    p.retain(|q| q.0 > 0.0);
+                }
+                (l.clone(), *c, p)
+            })
+            .collect();
+        let curves: Vec<Curve> = pts
+            .iter()
+            .map(|(l, c, p)| Curve {
+                label: l.clone(),
+                points: p,
+                color: *c,
+            })
+            .collect();
+        line_plot(&out.join(file), title, xd, yd, &curves)?;
+    }
+    Ok(())
+}

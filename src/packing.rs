@@ -1,0 +1,164 @@
+//! The initial loose packing of a shear case, generated once (seeded) so that both codes
+//! start from the identical state (LIGGGHTS reads it with `read_data`).
+
+use crate::spec::shear::ShearCase;
+
+/// Packing fraction of the loose initial packing.
+pub const LOOSE_PACKING_FRACTION: f64 = 0.3;
+
+/// SplitMix64: a small, fully specified generator, so a seed gives the same packing on every
+/// machine and every version of this crate.
+#[derive(Clone, Debug)]
+pub struct SplitMix64(u64);
+
+impl SplitMix64 {
+    pub fn new(seed: u64) -> Self {
+        SplitMix64(seed)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+/// Particles and plate positions of the initial state. y is the plate-normal direction:
+/// the bottom plate's base is at y = 0 (teeth up to `tooth_height`), the top plate's base at
+/// `top_y` (teeth down to `top_y - tooth_height`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Packing {
+    pub radius: Vec<f64>,
+    pub position: Vec<[f64; 3]>,
+    pub top_y: f64,
+    /// Upper bound of the simulation box in y.
+    pub box_y_hi: f64,
+    /// Lower bound of the simulation box in y.
+    pub box_y_lo: f64,
+}
+
+/// Random sequential placement without overlap (periodic in x and z) in a layer above the
+/// bottom plate's teeth, largest particles first. The layer height is the solid height over
+/// [`LOOSE_PACKING_FRACTION`]; it grows by 10 % whenever a particle cannot be placed.
+pub fn loose_packing(case: &ShearCase) -> Packing {
+    let t = case.plates.tooth_height();
+    let (lx, lz) = (case.box_x, case.box_z);
+    let mut classes: Vec<(f64, usize)> = case
+        .radii
+        .iter()
+        .cloned()
+        .zip(case.class_counts())
+        .collect();
+    classes.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let rmax = classes[0].0;
+    let mut height = case.solid_volume() / (lx * lz * LOOSE_PACKING_FRACTION);
+    'attempt: loop {
+        let mut rng = SplitMix64::new(case.seed);
+        let mut radius = Vec::with_capacity(case.particles);
+        let mut position: Vec<[f64; 3]> = Vec::with_capacity(case.particles);
+        let y0 = t + 0.1 * rmax;
+        let cell = 2.0 * rmax;
+        let (nx, nz) = (
+            (lx / cell).floor().max(1.0) as usize,
+            (lz / cell).floor().max(1.0) as usize,
+        );
+        let ny = ((height / cell).ceil() as usize).max(1);
+        let mut grid: Vec<Vec<usize>> = vec![Vec::new(); nx * ny * nz];
+        let cell_of = |p: [f64; 3]| {
+            let cx = ((p[0] / lx * nx as f64) as usize).min(nx - 1);
+            let cz = ((p[2] / lz * nz as f64) as usize).min(nz - 1);
+            let cy = (((p[1] - y0) / height * ny as f64).max(0.0) as usize).min(ny - 1);
+            (cx, cy, cz)
+        };
+        for &(r, n) in &classes {
+            for _ in 0..n {
+                let mut placed = false;
+                for _ in 0..20_000 {
+                    let p = [
+                        rng.uniform() * lx,
+                        y0 + r + rng.uniform() * (height - 2.0 * r),
+                        rng.uniform() * lz,
+                    ];
+                    let (cx, cy, cz) = cell_of(p);
+                    let mut ok = true;
+                    'check: for dx in [nx - 1, 0, 1] {
+                        for dy in [-1i64, 0, 1] {
+                            for dz in [nz - 1, 0, 1] {
+                                let gy = cy as i64 + dy;
+                                if gy < 0 || gy >= ny as i64 {
+                                    continue;
+                                }
+                                let gx = (cx + dx) % nx;
+                                let gz = (cz + dz) % nz;
+                                for &k in &grid[(gx * ny + gy as usize) * nz + gz] {
+                                    let q = position[k];
+                                    let mut d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+                                    d[0] -= lx * (d[0] / lx).round();
+                                    d[2] -= lz * (d[2] / lz).round();
+                                    let s = r + radius[k];
+                                    if d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < s * s {
+                                        ok = false;
+                                        break 'check;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    if ok {
+                        grid[(cx * ny + cy) * nz + cz].push(position.len());
+                        position.push(p);
+                        radius.push(r);
+                        placed = true;
+                        break;
+                    }
+                }
+                if !placed {
+                    height *= 1.1;
+                    continue 'attempt;
+                }
+            }
+        }
+        let top_y = y0 + height + t + 0.1 * rmax;
+        return Packing {
+            radius,
+            position,
+            top_y,
+            box_y_hi: top_y + 2.0 * rmax,
+            box_y_lo: -2.0 * rmax,
+        };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::{shear::ShearCase, RollingModel};
+
+    #[test]
+    fn packing_is_seeded_and_overlap_free() {
+        let c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 7).unwrap();
+        let a = loose_packing(&c);
+        let b = loose_packing(&c);
+        assert_eq!(a, b);
+        assert_eq!(a.radius.len(), 300);
+        for i in 0..a.radius.len() {
+            for j in 0..i {
+                let (p, q) = (a.position[i], a.position[j]);
+                let mut d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+                d[0] -= c.box_x * (d[0] / c.box_x).round();
+                d[2] -= c.box_z * (d[2] / c.box_z).round();
+                let dist = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                assert!(dist >= a.radius[i] + a.radius[j], "{i} {j}");
+            }
+            assert!(a.position[i][1] - a.radius[i] > c.plates.tooth_height());
+            assert!(a.position[i][1] + a.radius[i] < a.top_y - c.plates.tooth_height());
+        }
+        let c2 = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 8).unwrap();
+        assert_ne!(loose_packing(&c2).position, a.position);
+    }
+}

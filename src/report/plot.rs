@@ -1,0 +1,140 @@
+//! SVG line plots (plotters), e.g. mu(strain) of both codes overlaid.
+
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One curve: label, points, colour index (0 LIGGGHTS blue, 1 native orange, 2.. others).
+pub struct Curve<'a> {
+    pub label: String,
+    pub points: &'a [(f64, f64)],
+    pub color: usize,
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// Draws `curves` into an SVG file at `path`.
+pub fn line_plot(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    curves: &[Curve],
+) -> Result<()> {
+    let err = |e: String| Error::io(path, std::io::Error::other(e));
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    let pts = curves
+        .iter()
+        .flat_map(|c| c.points.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite());
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for p in pts {
+        x0 = x0.min(p.0);
+        x1 = x1.max(p.0);
+        y0 = y0.min(p.1);
+        y1 = y1.max(p.1);
+    }
+    if !x0.is_finite() {
+        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+    }
+    let pad = if y1 > y0 {
+        0.05 * (y1 - y0)
+    } else {
+        0.5 * y0.abs().max(1.0)
+    };
+    let tmp = path.with_extension("svg.tmp");
+    {
+        let root = SVGBackend::new(&tmp, (900, 520)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
+            .map_err(|e| err(e.to_string()))?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
+        for c in curves {
+            let color = PALETTE[c.color % PALETTE.len()];
+            chart
+                .draw_series(LineSeries::new(
+                    c.points
+                        .iter()
+                        .copied()
+                        .filter(|p| p.0.is_finite() && p.1.is_finite()),
+                    color.stroke_width(2),
+                ))
+                .map_err(|e| err(e.to_string()))?
+                .label(c.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| err(e.to_string()))?;
+        root.present().map_err(|e| err(e.to_string()))?;
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_an_svg_with_both_labels() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("mu.svg");
+        let a: Vec<(f64, f64)> = (0..50)
+            .map(|i| (i as f64 * 0.01, 0.4 + 0.01 * (i as f64).sin()))
+            .collect();
+        let b: Vec<(f64, f64)> = a.iter().map(|(x, y)| (*x, y + 0.005)).collect();
+        line_plot(
+            &p,
+            "mu",
+            "strain",
+            "mu",
+            &[
+                Curve {
+                    label: "LIGGGHTS".into(),
+                    points: &a,
+                    color: 0,
+                },
+                Curve {
+                    label: "native".into(),
+                    points: &b,
+                    color: 1,
+                },
+            ],
+        )
+        .unwrap();
+        let t = std::fs::read_to_string(&p).unwrap();
+        assert!(t.starts_with("<svg") && t.contains("LIGGGHTS") && t.contains("native"));
+    }
+}

@@ -1,0 +1,309 @@
+//! The shear experiment in both codes from one case and one initial packing: runs, progress,
+//! and the common time series (plate forces, mu, height, kinetic energies).
+
+use crate::deck::shear::{shear_deck, SNAPSHOT_PREFIX, THERMO_COLUMNS};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::liggghts::{last_thermo_step, read_thermo, Liggghts, LOG_NAME};
+use crate::packing::Packing;
+use crate::report::progress::Progress;
+use crate::report::vtk;
+use crate::series::Series;
+use crate::solver::shear::ShearSim;
+use crate::spec::shear::ShearCase;
+use std::path::Path;
+use std::time::Instant;
+
+/// One output row of either code: step, top force (3), bottom force (3), top plate y,
+/// translational and rotational kinetic energy.
+pub type Row = (u64, [f64; 9]);
+
+/// Result of one code's run.
+#[derive(Clone, Debug)]
+pub struct CodeRun {
+    pub rows: Vec<Row>,
+    pub wall_time: f64,
+    pub steps: u64,
+}
+
+impl CodeRun {
+    /// Particle-steps per second of wall time.
+    pub fn throughput(&self, particles: usize) -> f64 {
+        self.steps as f64 * particles as f64 / self.wall_time.max(1e-9)
+    }
+}
+
+/// Step at which each run (compression, stage 1, ...) ends.
+pub fn run_ends(case: &ShearCase) -> Vec<u64> {
+    let mut ends = vec![case.compression_steps];
+    for s in case.stage_steps() {
+        ends.push(ends.last().unwrap() + s);
+    }
+    ends
+}
+
+/// Bottom plate displacement along x at `step` [m] (0 during compression).
+pub fn displacement(case: &ShearCase, step: u64) -> f64 {
+    let mut d = 0.0;
+    let mut start = case.compression_steps;
+    for (stage, n) in case.stages.iter().zip(case.stage_steps()) {
+        if step <= start {
+            break;
+        }
+        let k = (step - start).min(n);
+        d += stage.speed * case.dt * k as f64;
+        start += n;
+    }
+    d
+}
+
+/// Index of the stage `step` belongs to (None during compression).
+pub fn stage_of(case: &ShearCase, step: u64) -> Option<usize> {
+    let ends = run_ends(case);
+    (1..ends.len())
+        .find(|&k| step > ends[k - 1] && step <= ends[k])
+        .map(|k| k - 1)
+}
+
+/// Whether the native solver records at `step`: every `output_every`, and the last step of
+/// each run (LIGGGHTS' thermo prints both).
+fn is_output(case: &ShearCase, step: u64, ends: &[u64]) -> bool {
+    step.is_multiple_of(case.output_every) || ends.contains(&step)
+}
+
+/// Runs the native solver. Outputs as LIGGGHTS' thermo: step 0, every `output_every`, and
+/// the last step of each run. Snapshots (VTK) go to `out/vtk/`. On failure the rows so far
+/// are written to `out/native_partial.csv` before the error is returned.
+pub fn run_native(
+    case: &ShearCase,
+    packing: &Packing,
+    out: &Path,
+    progress: &Progress,
+) -> Result<CodeRun> {
+    let t0 = Instant::now();
+    let mut sim = ShearSim::new(case, packing);
+    let ends = run_ends(case);
+    let mut rows = Vec::new();
+    let rec = |sim: &ShearSim| {
+        let r = sim.record();
+        (
+            r.step,
+            [
+                r.top_force[0],
+                r.top_force[1],
+                r.top_force[2],
+                r.bottom_force[0],
+                r.bottom_force[1],
+                r.bottom_force[2],
+                r.top_y,
+                r.ke,
+                r.erot,
+            ],
+        )
+    };
+    let result = (|| -> Result<()> {
+        sim.setup(0.0)?;
+        rows.push(rec(&sim));
+        let mut run_start = 0;
+        for (k, &end) in ends.iter().enumerate() {
+            if k > 0 {
+                sim.setup(case.stages[k - 1].speed)?;
+            }
+            while sim.step < end {
+                sim.step()?;
+                if is_output(case, sim.step, &ends) {
+                    sim.check_finite()?;
+                    let lost = sim.lost_particles(packing.box_y_lo, packing.box_y_hi);
+                    if lost > 0 {
+                        return Err(Error::Solver {
+                            step: sim.step,
+                            msg: format!("{lost} particles left the box through a plate"),
+                        });
+                    }
+                    rows.push(rec(&sim));
+                    progress.set(sim.step);
+                }
+                if case.snapshot_every > 0 && sim.step.is_multiple_of(case.snapshot_every) {
+                    vtk::write_snapshot(
+                        &out.join("vtk").join(format!("native_{:09}.vtk", sim.step)),
+                        &sim.snapshot(),
+                    )?;
+                }
+            }
+            run_start = end;
+        }
+        let _ = run_start;
+        Ok(())
+    })();
+    if let Err(e) = result {
+        let _ = shear_series(case, &rows).write_csv(&out.join("native_partial.csv"));
+        return Err(e);
+    }
+    progress.finish();
+    Ok(CodeRun {
+        rows,
+        wall_time: t0.elapsed().as_secs_f64(),
+        steps: sim.step,
+    })
+}
+
+/// Runs LIGGGHTS on the generated deck in `out/liggghts/` (kept: deck, data, meshes, log),
+/// converts its snapshots to VTK, and checks that no particle was lost.
+pub fn run_liggghts(
+    case: &ShearCase,
+    packing: &Packing,
+    lig: &Liggghts,
+    out: &Path,
+    progress: &Progress,
+) -> Result<CodeRun> {
+    let dir = out.join("liggghts");
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let deck = shear_deck(case, packing);
+    let ncol = THERMO_COLUMNS.len();
+    let t0 = Instant::now();
+    lig.run_with_progress(&deck, &dir, |d| {
+        if let Some(s) = last_thermo_step(&d.join(LOG_NAME), ncol) {
+            progress.set(s);
+        }
+    })?;
+    let wall = t0.elapsed().as_secs_f64();
+    progress.finish();
+    let thermo = read_thermo(&dir.join(LOG_NAME), ncol)?;
+    let mut rows = Vec::with_capacity(thermo.len());
+    for (step, v) in thermo {
+        let atoms = v[9] as usize;
+        if atoms != packing.radius.len() {
+            return Err(Error::LiggghtsFailed {
+                reason: format!(
+                    "LIGGGHTS lost particles: {atoms} of {} left at step {step}",
+                    packing.radius.len()
+                ),
+                log: dir.join(LOG_NAME),
+                tail: String::new(),
+            });
+        }
+        rows.push((step, [v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]]));
+    }
+    if rows.last().map(|r| r.0) != Some(case.total_steps()) {
+        return Err(Error::LiggghtsFailed {
+            reason: format!(
+                "the log ends at step {:?}, expected {}",
+                rows.last().map(|r| r.0),
+                case.total_steps()
+            ),
+            log: dir.join(LOG_NAME),
+            tail: String::new(),
+        });
+    }
+    if case.snapshot_every > 0 {
+        vtk::convert_liggghts_snapshots(&dir, SNAPSHOT_PREFIX, &out.join("vtk"))?;
+    }
+    Ok(CodeRun {
+        rows,
+        wall_time: wall,
+        steps: case.total_steps(),
+    })
+}
+
+/// The common series of a shear run. Sign convention: forces are those the particles exert on
+/// the plates; the top plate is pushed up (`top_f_y > 0`) and dragged along the shear
+/// direction, so `mu = top_f_x / top_f_y` is positive (0 when the plate is not loaded).
+/// `strain` = bottom plate displacement / current height; `height` = distance between the
+/// plates' mean surfaces.
+pub fn shear_series(case: &ShearCase, rows: &[Row]) -> Series {
+    let columns = [
+        "time[s]",
+        "strain[-]",
+        "top_f_x[N]",
+        "top_f_y[N]",
+        "top_f_z[N]",
+        "bottom_f_x[N]",
+        "bottom_f_y[N]",
+        "bottom_f_z[N]",
+        "top_y[m]",
+        "height[m]",
+        "mu[-]",
+        "ke[J]",
+        "erot[J]",
+    ];
+    let t = case.plates.tooth_height();
+    let mut s = Series {
+        columns: columns.iter().map(|c| c.to_string()).collect(),
+        steps: Vec::with_capacity(rows.len()),
+        rows: Vec::with_capacity(rows.len()),
+    };
+    for (step, v) in rows {
+        let h = v[6] - t;
+        let mu = if v[1] != 0.0 { v[0] / v[1] } else { 0.0 };
+        s.steps.push(*step);
+        s.rows.push(vec![
+            *step as f64 * case.dt,
+            displacement(case, *step) / h,
+            v[0],
+            v[1],
+            v[2],
+            v[3],
+            v[4],
+            v[5],
+            v[6],
+            h,
+            mu,
+            v[7],
+            v[8],
+        ]);
+    }
+    s
+}
+
+/// Writes a run's series atomically.
+pub fn write_series(case: &ShearCase, run: &CodeRun, path: &Path) -> Result<Series> {
+    let s = shear_series(case, &run.rows);
+    s.write_csv(path)?;
+    Ok(s)
+}
+
+/// Saves the packing both codes start from (for the record).
+pub fn write_packing(packing: &Packing, path: &Path) -> Result<()> {
+    let mut s = String::from("id,radius[m],x[m],y[m],z[m]\n");
+    for (k, (r, p)) in packing.radius.iter().zip(&packing.position).enumerate() {
+        s.push_str(&format!(
+            "{},{r:e},{:e},{:e},{:e}\n",
+            k + 1,
+            p[0],
+            p[1],
+            p[2]
+        ));
+    }
+    write_atomic(path, s.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::RollingModel;
+
+    #[test]
+    fn displacement_follows_the_stage_schedule() {
+        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        c.stages = vec![
+            crate::spec::shear::Stage {
+                speed: 0.01,
+                strain: 0.1,
+            },
+            crate::spec::shear::Stage {
+                speed: 0.02,
+                strain: 0.1,
+            },
+        ];
+        let n = c.stage_steps();
+        let ends = run_ends(&c);
+        assert_eq!(displacement(&c, c.compression_steps), 0.0);
+        let d1 = displacement(&c, ends[1]);
+        assert!((d1 - 0.01 * c.dt * n[0] as f64).abs() < 1e-15);
+        let d2 = displacement(&c, ends[2]);
+        assert!((d2 - d1 - 0.02 * c.dt * n[1] as f64).abs() < 1e-15);
+        assert_eq!(stage_of(&c, 5), None);
+        assert_eq!(stage_of(&c, ends[1]), Some(0));
+        assert_eq!(stage_of(&c, ends[1] + 1), Some(1));
+    }
+}

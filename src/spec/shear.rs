@@ -1,0 +1,552 @@
+//! The plane-shear experiment of the paper: a periodic (x, z) box of spheres between a
+//! bottom plate sheared in x and a top plate servo-controlled to a normal stress (free in y).
+//! Presets `paper`, `fast` and `ci`; every value validated before either code sees it.
+
+use super::{check_identifier, Material, Models, RollingModel};
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// How the size-class percentages are read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fractions {
+    /// Fractions of the solid mass (LIGGGHTS `particledistribution/discrete`).
+    Mass,
+    /// Fractions of the particle count (`/numberbased`).
+    Number,
+}
+
+/// Plate shape. Teeth: a triangle wave of height `tooth_height` and period
+/// `tooth_wavelength` along x, uniform along z, pointing into the gouge.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Plates {
+    Flat,
+    Teeth {
+        tooth_height: f64,
+        tooth_wavelength: f64,
+    },
+}
+
+impl Plates {
+    pub fn tooth_height(&self) -> f64 {
+        match self {
+            Plates::Flat => 0.0,
+            Plates::Teeth { tooth_height, .. } => *tooth_height,
+        }
+    }
+}
+
+/// The servo of the top plate (mesh_module_stress_servo.cpp, PID mode).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Servo {
+    /// Maximum plate speed [m/s]; LIGGGHTS requires `vel_max < skin / (2 dt)`.
+    pub vel_max: f64,
+    /// Proportional gain (dimensionless: speed = kp vel_max at 100 % force error).
+    pub kp: f64,
+    #[serde(default)]
+    pub ki: f64,
+    #[serde(default)]
+    pub kd: f64,
+}
+
+/// One shear stage: bottom plate speed [m/s] until `strain` (displacement / estimated height).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stage {
+    pub speed: f64,
+    pub strain: f64,
+}
+
+/// A shear case: the single source of truth for the deck and the native run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShearCase {
+    pub version: u32,
+    /// Identifier, also the run directory name.
+    pub name: String,
+    /// Seed of the initial loose packing.
+    pub seed: u64,
+    pub particles: usize,
+    /// Radii of the size classes [m].
+    pub radii: Vec<f64>,
+    /// Percentages of the size classes (sum 100).
+    pub percentages: Vec<f64>,
+    pub fractions: Fractions,
+    /// Box length along x (shear direction, periodic) [m].
+    pub box_x: f64,
+    /// Box length along z (periodic) [m].
+    pub box_z: f64,
+    pub plates: Plates,
+    pub material: Material,
+    pub models: Models,
+    /// Time step [s].
+    pub dt: f64,
+    /// Target normal stress on the top plate [Pa].
+    pub normal_stress: f64,
+    pub servo: Servo,
+    /// Neighbour skin [m].
+    pub skin: f64,
+    /// Steps of servo compression before shearing.
+    pub compression_steps: u64,
+    pub stages: Vec<Stage>,
+    /// Plate-force output interval [steps].
+    pub output_every: u64,
+    /// VTK snapshot interval [steps] (0: none).
+    #[serde(default)]
+    pub snapshot_every: u64,
+}
+
+/// Packing fraction assumed for the estimated sample height `h0` that converts stage strains
+/// into step counts (the outputs report strain with the measured height).
+pub const DENSE_PACKING_FRACTION: f64 = 0.6;
+
+impl ShearCase {
+    /// Built-in presets: `paper` (the paper's protocol), `fast` (same box and particles,
+    /// faster shear within I <= 1e-3, for nightly runs), `ci` (a few hundred particles).
+    pub fn preset(
+        name: &str,
+        rolling: RollingModel,
+        mu_r: f64,
+        eta_r: f64,
+        seed: u64,
+    ) -> Result<Self> {
+        let material = Material {
+            youngs_modulus: 70e9,
+            poisson_ratio: 0.3,
+            density: 2e6,
+            restitution: 0.5,
+            friction: 0.5,
+            rolling_friction: mu_r,
+            rolling_damping: eta_r,
+            rolling_stiffness: 2.25,
+        };
+        let models = Models {
+            normal: super::NormalModel::Hertz,
+            tangential: super::TangentialModel::History,
+            rolling,
+            torsion_torque: false,
+        };
+        let mut c = ShearCase {
+            version: 1,
+            name: format!(
+                "{name}_{}_mur{mu_r}_etar{eta_r}_seed{seed}",
+                rolling.keyword()
+            )
+            .replace('.', "p"),
+            seed,
+            particles: 2500,
+            radii: vec![0.2e-3, 0.15e-3, 0.1e-3],
+            percentages: vec![14.0, 29.0, 57.0],
+            // Number fractions: the paper's h = 5 mm is only reached this way (mass fractions
+            // give about 2.6 mm at 10 MPa with 2500 particles).
+            fractions: Fractions::Number,
+            box_x: 4e-3,
+            box_z: 2.4e-3,
+            plates: Plates::Teeth {
+                tooth_height: 0.2e-3,
+                tooth_wavelength: 0.5e-3,
+            },
+            material,
+            models,
+            dt: 1.5e-6,
+            normal_stress: 10e6,
+            servo: Servo {
+                vel_max: 0.5,
+                kp: 0.1,
+                ki: 50.0,
+                kd: 0.0,
+            },
+            skin: 0.05e-3,
+            compression_steps: 40_000,
+            stages: vec![
+                Stage {
+                    speed: 100e-6,
+                    strain: 1.0,
+                },
+                Stage {
+                    speed: 300e-6,
+                    strain: 1.0,
+                },
+                Stage {
+                    speed: 1000e-6,
+                    strain: 1.0,
+                },
+            ],
+            output_every: 1000,
+            snapshot_every: 0,
+        };
+        match name {
+            "paper" => {}
+            "fast" => {
+                c.stages = vec![Stage {
+                    speed: 0.02,
+                    strain: 1.0,
+                }];
+                c.output_every = 500;
+                c.snapshot_every = 50_000;
+            }
+            "ci" => {
+                c.particles = 300;
+                c.box_x = 2e-3;
+                c.box_z = 1.5e-3;
+                c.compression_steps = 12_000;
+                c.stages = vec![Stage {
+                    speed: 0.015,
+                    strain: 0.6,
+                }];
+                c.output_every = 100;
+                c.snapshot_every = 0;
+            }
+            other => {
+                return Err(Error::Unknown {
+                    what: "preset",
+                    name: other.into(),
+                    valid: "ci, fast, paper".into(),
+                })
+            }
+        }
+        Ok(c)
+    }
+
+    /// Number of particles of each size class (number fractions, or mass fractions
+    /// converted with n_k ~ f_k / r_k^3), rounded so that they sum to `particles`.
+    pub fn class_counts(&self) -> Vec<usize> {
+        let w: Vec<f64> = match self.fractions {
+            Fractions::Number => self.percentages.clone(),
+            Fractions::Mass => self
+                .percentages
+                .iter()
+                .zip(&self.radii)
+                .map(|(p, r)| p / (r * r * r))
+                .collect(),
+        };
+        let total: f64 = w.iter().sum();
+        let mut counts: Vec<usize> = w
+            .iter()
+            .map(|x| (x / total * self.particles as f64).round() as usize)
+            .collect();
+        let sum: usize = counts.iter().sum();
+        let last = counts.len() - 1;
+        counts[last] = (counts[last] + self.particles).saturating_sub(sum);
+        counts
+    }
+
+    /// Solid volume of the particles [m^3].
+    pub fn solid_volume(&self) -> f64 {
+        self.class_counts()
+            .iter()
+            .zip(&self.radii)
+            .map(|(n, r)| *n as f64 * 4.0 / 3.0 * std::f64::consts::PI * r * r * r)
+            .sum()
+    }
+
+    /// Estimated height of the compacted sample [m], used to turn stage strains into steps.
+    pub fn estimated_height(&self) -> f64 {
+        self.solid_volume() / (self.box_x * self.box_z * DENSE_PACKING_FRACTION)
+    }
+
+    /// Target force on the top plate [N]: normal stress times the plate area.
+    pub fn target_force(&self) -> f64 {
+        self.normal_stress * self.box_x * self.box_z
+    }
+
+    /// Steps of each shear stage.
+    pub fn stage_steps(&self) -> Vec<u64> {
+        let h = self.estimated_height();
+        self.stages
+            .iter()
+            .map(|s| (s.strain * h / s.speed / self.dt).ceil() as u64)
+            .collect()
+    }
+
+    pub fn total_steps(&self) -> u64 {
+        self.compression_steps + self.stage_steps().iter().sum::<u64>()
+    }
+
+    /// Inertial number of stage k: `I = gamma_dot d_mean sqrt(rho / P)`.
+    pub fn inertial_number(&self, k: usize) -> f64 {
+        let d = 2.0 * self.mean_radius();
+        self.stages[k].speed / self.estimated_height()
+            * d
+            * (self.material.density / self.normal_stress).sqrt()
+    }
+
+    /// Number-weighted mean radius [m].
+    pub fn mean_radius(&self) -> f64 {
+        let c = self.class_counts();
+        c.iter()
+            .zip(&self.radii)
+            .map(|(n, r)| *n as f64 * r)
+            .sum::<f64>()
+            / self.particles as f64
+    }
+
+    /// Contact stiffness number `kappa = (E* / P)^(2/3)` (Hertz), E* = E / (1 - nu^2).
+    pub fn kappa(&self) -> f64 {
+        let m = &self.material;
+        (m.youngs_modulus / (1.0 - m.poisson_ratio * m.poisson_ratio) / self.normal_stress)
+            .powf(2.0 / 3.0)
+    }
+
+    /// Validates every field; `allow_inertial` lifts the I <= 1e-3 limit.
+    pub fn validate(&self, allow_inertial: bool) -> Result<Vec<String>> {
+        let mut warnings = Vec::new();
+        if self.version != 1 {
+            return Err(Error::invalid("version", self.version, "1"));
+        }
+        check_identifier("name", &self.name)?;
+        if self.particles < 10 || self.particles > 10_000_000 {
+            return Err(Error::invalid(
+                "particles",
+                self.particles,
+                "10 ..= 10000000",
+            ));
+        }
+        if self.radii.is_empty() || self.radii.len() != self.percentages.len() {
+            return Err(Error::invalid(
+                "radii",
+                format!("{:?}", self.radii),
+                "one radius per percentage, at least one",
+            ));
+        }
+        for (k, r) in self.radii.iter().enumerate() {
+            pos(&format!("radii[{k}]"), *r)?;
+        }
+        for (k, p) in self.percentages.iter().enumerate() {
+            if !(p.is_finite() && *p >= 0.0) {
+                return Err(Error::invalid(
+                    format!("percentages[{k}]"),
+                    p,
+                    "a finite number >= 0",
+                ));
+            }
+        }
+        let sum: f64 = self.percentages.iter().sum();
+        if (sum - 100.0).abs() > 1e-6 {
+            return Err(Error::invalid("percentages", sum, "values summing to 100"));
+        }
+        pos("box_x", self.box_x)?;
+        pos("box_z", self.box_z)?;
+        let rmax = self.radii.iter().cloned().fold(0.0, f64::max);
+        let rmin = self.radii.iter().cloned().fold(f64::INFINITY, f64::min);
+        let cut = 2.0 * rmax + self.skin;
+        if self.box_x < 3.0 * cut || self.box_z < 3.0 * cut {
+            return Err(Error::invalid(
+                "box_x/box_z",
+                format!("{:e} x {:e} m", self.box_x, self.box_z),
+                format!(">= 3 neighbour cutoffs (3 x {cut:e} m) so periodic images are distinct"),
+            ));
+        }
+        if let Plates::Teeth {
+            tooth_height,
+            tooth_wavelength,
+        } = &self.plates
+        {
+            pos("plates.tooth_height", *tooth_height)?;
+            pos("plates.tooth_wavelength", *tooth_wavelength)?;
+            let n = self.box_x / tooth_wavelength;
+            if (n - n.round()).abs() > 1e-9 || n.round() < 1.0 {
+                return Err(Error::invalid(
+                    "plates.tooth_wavelength",
+                    tooth_wavelength,
+                    format!(
+                        "box_x / n for a whole number n of teeth (box_x = {:e} m)",
+                        self.box_x
+                    ),
+                ));
+            }
+        }
+        let m = &self.material;
+        pos("material.youngs_modulus", m.youngs_modulus)?;
+        if !(0.0..0.5).contains(&m.poisson_ratio) {
+            return Err(Error::invalid(
+                "material.poisson_ratio",
+                m.poisson_ratio,
+                "0 <= nu < 0.5",
+            ));
+        }
+        pos("material.density", m.density)?;
+        if !(m.restitution > 0.05 && m.restitution <= 1.0) {
+            return Err(Error::invalid(
+                "material.restitution",
+                m.restitution,
+                "0.05 < e <= 1 (LIGGGHTS' range)",
+            ));
+        }
+        nonneg("material.friction", m.friction)?;
+        nonneg("material.rolling_friction (--mu-r)", m.rolling_friction)?;
+        nonneg("material.rolling_damping (--eta-r)", m.rolling_damping)?;
+        if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {
+            return Err(Error::invalid(
+                "material.rolling_damping (--eta-r)",
+                m.rolling_damping,
+                format!(
+                    "0 with rolling model `{}`: eta_r acts only in epsd and epsd3",
+                    self.models.rolling
+                ),
+            ));
+        }
+        if m.rolling_stiffness < 1.0 || !m.rolling_stiffness.is_finite() {
+            return Err(Error::invalid(
+                "material.rolling_stiffness",
+                m.rolling_stiffness,
+                ">= 1",
+            ));
+        }
+        pos("dt", self.dt)?;
+        let t_r = super::rayleigh_time(m, rmin);
+        if self.dt > t_r {
+            return Err(Error::invalid(
+                "dt",
+                self.dt,
+                format!("<= the Rayleigh time {t_r:.4e} s"),
+            ));
+        }
+        if self.dt > 0.2 * t_r {
+            warnings.push(format!(
+                "dt = {:e} s is {:.0} % of the Rayleigh time {:.3e} s (above 20 %)",
+                self.dt,
+                100.0 * self.dt / t_r,
+                t_r
+            ));
+        }
+        pos("normal_stress", self.normal_stress)?;
+        pos("servo.vel_max", self.servo.vel_max)?;
+        pos("skin", self.skin)?;
+        if self.skin > rmin {
+            return Err(Error::invalid(
+                "skin",
+                self.skin,
+                format!("<= the smallest radius {rmin:e} m"),
+            ));
+        }
+        if self.servo.vel_max >= self.skin / (2.0 * self.dt) {
+            return Err(Error::invalid(
+                "servo.vel_max",
+                self.servo.vel_max,
+                format!(
+                    "< skin / (2 dt) = {:e} m/s (LIGGGHTS' servo requirement)",
+                    self.skin / (2.0 * self.dt)
+                ),
+            ));
+        }
+        for (f, v) in [
+            ("servo.kp", self.servo.kp),
+            ("servo.ki", self.servo.ki),
+            ("servo.kd", self.servo.kd),
+        ] {
+            nonneg(f, v)?;
+        }
+        if self.servo.kp + self.servo.ki + self.servo.kd == 0.0 {
+            return Err(Error::invalid("servo.kp", 0, "kp, ki, kd not all zero"));
+        }
+        if self.compression_steps == 0 {
+            return Err(Error::invalid("compression_steps", 0, ">= 1"));
+        }
+        if self.stages.is_empty() {
+            return Err(Error::invalid("stages", "[]", "at least one shear stage"));
+        }
+        for (k, s) in self.stages.iter().enumerate() {
+            pos(&format!("stages[{k}].speed"), s.speed)?;
+            pos(&format!("stages[{k}].strain"), s.strain)?;
+        }
+        if self.output_every == 0 {
+            return Err(Error::invalid("output_every", 0, ">= 1"));
+        }
+        for k in 0..self.stages.len() {
+            let i = self.inertial_number(k);
+            if i > 1e-3 && !allow_inertial {
+                return Err(Error::invalid(
+                    format!("stages[{k}].speed"),
+                    self.stages[k].speed,
+                    format!("a speed with inertial number I <= 1e-3 (this one gives I = {i:.2e}); pass --allow-inertial to run anyway"),
+                ));
+            }
+        }
+        if self.total_steps() > 2_000_000_000 {
+            return Err(Error::invalid(
+                "stages",
+                self.total_steps(),
+                "at most 2e9 steps in all",
+            ));
+        }
+        Ok(warnings)
+    }
+}
+
+fn pos(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "a finite number > 0"))
+    }
+}
+
+fn nonneg(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "a finite number >= 0"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_validate_and_number_fractions_give_paper_height() {
+        for p in ["paper", "fast", "ci"] {
+            let c = ShearCase::preset(p, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+            c.validate(false).unwrap();
+        }
+        let c = ShearCase::preset("paper", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+        let counts = c.class_counts();
+        assert_eq!(counts.iter().sum::<usize>(), 2500);
+        assert_eq!(counts, vec![350, 725, 1425]);
+        let h = c.estimated_height();
+        assert!((4.5e-3..5.3e-3).contains(&h), "{h}");
+        let mut m = c.clone();
+        m.fractions = Fractions::Mass;
+        let hm = m.estimated_height();
+        assert!((2.3e-3..3.0e-3).contains(&hm), "{hm}");
+    }
+
+    #[test]
+    fn eta_r_with_epsd2_is_refused() {
+        let c = ShearCase::preset("ci", RollingModel::Epsd2, 0.5, 0.5, 1).unwrap();
+        let e = c.validate(false).unwrap_err().to_string();
+        assert!(e.contains("eta_r acts only in epsd and epsd3"), "{e}");
+    }
+
+    #[test]
+    fn inertial_limit_and_servo_checks() {
+        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        c.stages[0].speed = 10.0;
+        assert!(c
+            .validate(false)
+            .unwrap_err()
+            .to_string()
+            .contains("--allow-inertial"));
+        assert!(c.validate(true).is_ok());
+        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        c.servo.vel_max = 100.0;
+        assert!(c
+            .validate(false)
+            .unwrap_err()
+            .to_string()
+            .contains("skin / (2 dt)"));
+        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        c.normal_stress = 0.0;
+        assert!(c
+            .validate(false)
+            .unwrap_err()
+            .to_string()
+            .contains("normal_stress"));
+        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        c.box_x = 0.5e-3;
+        assert!(c.validate(false).unwrap_err().to_string().contains("box_x"));
+    }
+}
