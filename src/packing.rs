@@ -35,6 +35,10 @@ impl SplitMix64 {
 pub struct Packing {
     pub radius: Vec<f64>,
     pub position: Vec<[f64; 3]>,
+    /// Velocities [m/s] (zero for a generated packing; set for a compacted state).
+    pub velocity: Vec<[f64; 3]>,
+    /// Angular velocities [rad/s].
+    pub omega: Vec<[f64; 3]>,
     pub top_y: f64,
     /// Upper bound of the simulation box in y.
     pub box_y_hi: f64,
@@ -124,9 +128,12 @@ pub fn loose_packing(case: &ShearCase) -> Packing {
             }
         }
         let top_y = y0 + height + t + 0.1 * rmax;
+        let n = radius.len();
         return Packing {
             radius,
             position,
+            velocity: vec![[0.0; 3]; n],
+            omega: vec![[0.0; 3]; n],
             top_y,
             box_y_hi: top_y + 2.0 * rmax,
             box_y_lo: -2.0 * rmax,

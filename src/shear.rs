@@ -24,6 +24,8 @@ pub struct CodeRun {
     pub rows: Vec<Row>,
     pub wall_time: f64,
     pub steps: u64,
+    /// Native runs: the state at the end of compression.
+    pub compacted: Option<Packing>,
 }
 
 impl CodeRun {
@@ -84,6 +86,7 @@ pub fn run_native(
     let mut sim = ShearSim::new(case, packing);
     let ends = run_ends(case);
     let mut rows = Vec::new();
+    let mut compacted = None;
     let rec = |sim: &ShearSim| {
         let r = sim.record();
         (
@@ -104,7 +107,6 @@ pub fn run_native(
     let result = (|| -> Result<()> {
         sim.setup(0.0)?;
         rows.push(rec(&sim));
-        let mut run_start = 0;
         for (k, &end) in ends.iter().enumerate() {
             if k > 0 {
                 sim.setup(case.stages[k - 1].speed)?;
@@ -130,9 +132,10 @@ pub fn run_native(
                     )?;
                 }
             }
-            run_start = end;
+            if k == 0 {
+                compacted = Some(sim.state(packing));
+            }
         }
-        let _ = run_start;
         Ok(())
     })();
     if let Err(e) = result {
@@ -144,6 +147,7 @@ pub fn run_native(
         rows,
         wall_time: t0.elapsed().as_secs_f64(),
         steps: sim.step,
+        compacted,
     })
 }
 
@@ -202,6 +206,7 @@ pub fn run_liggghts(
         rows,
         wall_time: wall,
         steps: case.total_steps(),
+        compacted: None,
     })
 }
 

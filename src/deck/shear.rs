@@ -223,6 +223,28 @@ pub fn shear_deck(case: &ShearCase, packing: &Packing) -> Deck {
         )
         .unwrap();
     }
+    if packing
+        .velocity
+        .iter()
+        .chain(&packing.omega)
+        .any(|v| v.iter().any(|c| *c != 0.0))
+    {
+        writeln!(dw, "\nVelocities\n").unwrap();
+        for (k, (v, w)) in packing.velocity.iter().zip(&packing.omega).enumerate() {
+            writeln!(
+                dw,
+                "{} {} {} {} {} {} {}",
+                k + 1,
+                num(v[0]),
+                num(v[1]),
+                num(v[2]),
+                num(w[0]),
+                num(w[1]),
+                num(w[2])
+            )
+            .unwrap();
+        }
+    }
     let bottom = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
     let top = Plate::new(Side::Top, packing.top_y, &case.plates, case.box_x);
     Deck {

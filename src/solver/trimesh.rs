@@ -5,9 +5,10 @@
 //!   the shared edge of non-coplanar neighbours is active on the one with the higher id only,
 //!   of coplanar ones on neither. A corner is inactive if two of the edges meeting there are
 //!   colinear (with different end points) or none of them is active; otherwise active on the
-//!   triangle with the highest id. Corners outside the box ([lo, hi)) keep the default (active).
-//!   Periodic images count as neighbours (LIGGGHTS builds the topology with its ghost
-//!   elements: a flat periodic plate shows no extra contact at its seams).
+//!   triangle with the highest id. Periodic images count as neighbours for edges and corners
+//!   alike (LIGGGHTS builds the topology with its ghost elements: a flat periodic plate shows
+//!   no extra contact at its seams, and a ridge ending on a seam has no active corner there;
+//!   both checked against LIGGGHTS).
 //! - Contact (`resolveTriSphereContactBary`): barycentric signs select face (all positive),
 //!   edge or corner; an inactive edge/corner gives no contact. Triangles must have no obtuse
 //!   angle (the obtuse-corner branch is not mirrored; checked at construction).
@@ -126,10 +127,6 @@ impl TriMesh {
         for i in 0..n {
             for k in 0..3 {
                 let node = tris[i].nodes[k];
-                let inside = (0..3).all(|d| node[d] >= lo[d] && node[d] < hi[d]);
-                if !inside {
-                    continue;
-                }
                 let mut edges: Vec<(V3, V3)> = Vec::new();
                 let mut any_active = false;
                 let mut max_id = 0;
@@ -367,15 +364,11 @@ mod tests {
     }
 
     #[test]
-    fn flat_periodic_plate_has_no_active_edges_and_only_default_corners() {
+    fn flat_periodic_plate_has_no_active_edges_or_corners() {
         let m = flat(2.0, 1.5);
         assert_eq!(m.edge_active, vec![[false; 3]; 2]);
-        // nodes on the upper box faces (x = lx or z = lz) are outside LIGGGHTS' subdomain and
-        // keep the default; the node at the origin is inactive (colinear edges)
-        assert_eq!(
-            m.corner_active,
-            vec![[false, true, true], [false, true, true]]
-        );
+        // every node has colinear edges through the periodic images
+        assert_eq!(m.corner_active, vec![[false; 3]; 2]);
         assert_eq!(m.coplanar, vec![vec![1], vec![0]]);
         // a sphere anywhere above finds exactly one face among the triangles and images
         let p = [1.0, 0.05, 1e-6];

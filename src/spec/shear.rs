@@ -194,7 +194,7 @@ impl ShearCase {
                 c.compression_steps = 12_000;
                 c.stages = vec![Stage {
                     speed: 0.015,
-                    strain: 0.6,
+                    strain: 1.0,
                 }];
                 c.output_every = 100;
                 c.snapshot_every = 0;

@@ -104,6 +104,9 @@ pub struct ShearSim {
     top_base0: f64,
     pub servo: Servo,
     bottom_speed: f64,
+    /// Node velocity of the bottom mesh: zero in setup (FixMoveMesh::setup zeroes it), the
+    /// stage speed from the first step on (MeshMoverLinear).
+    bottom_node_v: f64,
     pub shear_displacement: f64,
     bottom_hold: f64,
     top_hold: f64,
@@ -139,8 +142,8 @@ impl ShearSim {
                 lz: case.box_z,
             },
             x: packing.position.clone(),
-            v: vec![[0.0; 3]; n],
-            omega: vec![[0.0; 3]; n],
+            v: packing.velocity.clone(),
+            omega: packing.omega.clone(),
             f: vec![[0.0; 3]; n],
             torque: vec![[0.0; 3]; n],
             radius,
@@ -160,6 +163,7 @@ impl ShearSim {
             top_base0: packing.top_y,
             servo: Servo::new(&case.servo, case.target_force(), com, case.dt),
             bottom_speed: 0.0,
+            bottom_node_v: 0.0,
             shear_displacement: 0.0,
             bottom_hold: 0.0,
             top_hold: packing.top_y,
@@ -173,6 +177,7 @@ impl ShearSim {
     /// servo's reference, a neighbour rebuild, and forces without history update.
     pub fn setup(&mut self, bottom_speed: f64) -> Result<()> {
         self.bottom_speed = bottom_speed;
+        self.bottom_node_v = 0.0;
         self.servo.setup();
         self.top_base0 = self.top.base_y;
         self.top_orig = self.meshes[1].tris.iter().map(|t| t.nodes).collect();
@@ -224,6 +229,36 @@ impl ShearSim {
         }
     }
 
+    /// The current state as an initial state for a new run of both codes (positions wrapped
+    /// into the box, velocities, angular velocities, top plate position). Contact histories
+    /// and the servo's state start afresh, in LIGGGHTS as here.
+    pub fn state(&self, like: &Packing) -> Packing {
+        let (lx, lz) = (self.box_.lx, self.box_.lz);
+        Packing {
+            radius: like.radius.clone(),
+            position: self
+                .x
+                .iter()
+                .map(|p| [p[0].rem_euclid(lx), p[1], p[2].rem_euclid(lz)])
+                .collect(),
+            velocity: self.v.clone(),
+            omega: self.omega.clone(),
+            top_y: self.top.base_y,
+            box_y_hi: like.box_y_hi,
+            box_y_lo: like.box_y_lo,
+        }
+    }
+
+    /// The listed pairs.
+    pub fn pairs(&self) -> &[neighbor::Pair] {
+        &self.nl.pairs
+    }
+
+    /// Current force on every particle [N].
+    pub fn forces(&self) -> &[[f64; 3]] {
+        &self.f
+    }
+
     /// Neighbour rebuilds so far.
     pub fn neighbor_builds(&self) -> u64 {
         self.nl.builds
@@ -251,6 +286,7 @@ impl ShearSim {
         let d = self.servo.initial_integrate();
         self.top.base_y = self.top_base0 + d[1];
         self.meshes[1].place(&self.top_orig, d);
+        self.bottom_node_v = self.bottom_speed;
         if self.bottom_speed != 0.0 {
             // MeshMoverLinear: nodes += vel * dt every step
             let dx = self.bottom_speed * dt;
@@ -406,7 +442,7 @@ impl ShearSim {
         let (cand, cstart) = (&self.wall_cand, &self.wall_start);
         let (lx, lz) = (self.box_.lx, self.box_.lz);
         // node velocities: move/mesh linear (bottom), servo vcm (top)
-        let vnode = [[self.bottom_speed, 0.0, 0.0], self.servo.vcm];
+        let vnode = [[self.bottom_node_v, 0.0, 0.0], self.servo.vcm];
         let failed = std::sync::atomic::AtomicBool::new(false);
         self.f
             .par_iter_mut()
@@ -519,6 +555,14 @@ impl ShearSim {
                             omega_i: omega[q],
                             ..Default::default()
                         };
+                        if std::env::var_os("DEM_DEBUG_WALL").is_some() {
+                            eprintln!(
+                                "wall p {} mesh {m} tri {tri} img {img} face {} d {:e}",
+                                q + 1,
+                                hit.face,
+                                hit.d
+                            );
+                        }
                         let mut hist = slots.rec[slot].hist;
                         let (fi, _, _) =
                             surfaces_intersect(&mut cd, params, &mut hist, update_history);
