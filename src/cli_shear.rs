@@ -59,6 +59,9 @@ pub struct ShearArgs {
     /// Allow stages with inertial number I > 1e-3.
     #[arg(long)]
     pub allow_inertial: bool,
+    /// Write particle snapshots (VTK, for ParaView) every N steps (0: the preset's choice).
+    #[arg(long, default_value_t = 0)]
+    pub snapshot_every: u64,
     /// LIGGGHTS binary.
     #[arg(long)]
     pub liggghts: Option<PathBuf>,
@@ -70,6 +73,11 @@ pub struct ShearArgs {
 /// The validated case of one seed.
 pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> {
     let rolling = RollingModel::parse(&a.rolling)?;
+    for (flag, v) in [("--mu-r", a.mu_r), ("--eta-r", a.eta_r)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Error::invalid(flag, v, "a finite number >= 0"));
+        }
+    }
     if rolling == RollingModel::Off && a.mu_r > 0.0 {
         return Err(Error::invalid("--mu-r", a.mu_r, "0 with --rolling off"));
     }
@@ -84,6 +92,9 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
         for s in &mut c.stages {
             s.strain = strain;
         }
+    }
+    if a.snapshot_every > 0 {
+        c.snapshot_every = a.snapshot_every;
     }
     let w = c.validate(a.allow_inertial)?;
     Ok((c, w))

@@ -1,0 +1,188 @@
+//! `verify shear` end to end: the ci preset against live LIGGGHTS (the issue's acceptance
+//! run), the chaos-limited lockstep, resumption, snapshots, and errors for bad input.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn verify(args: &[&str]) -> Output {
+    Command::new(common::verify_bin())
+        .args(args)
+        .output()
+        .expect("run verify")
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn ci_preset_agrees_with_liggghts() {
+    common::liggghts();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = verify(&[
+        "shear",
+        "--mu-r",
+        "0.5",
+        "--eta-r",
+        "0.5",
+        "--preset",
+        "ci",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let s = summary(&out);
+    assert_eq!(s["pass"], true);
+    let results = s["results"].as_array().unwrap();
+    let names: Vec<&str> = results
+        .iter()
+        .map(|r| r["channel"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "normal_stress_liggghts",
+            "normal_stress_native",
+            "mu_steady"
+        ]
+    );
+    // physically sensible steady friction in both codes
+    for code in ["liggghts", "native"] {
+        let mu = s[code]["mu"].as_f64().unwrap();
+        assert!((0.2..0.8).contains(&mu), "{code} mu = {mu}");
+        assert_eq!(s[code]["per_seed_mu"].as_array().unwrap().len(), 3);
+    }
+    for seed in s["seeds"].as_array().unwrap() {
+        // the codes agree step by step until chaos: at least as long as two native runs one
+        // ulp apart (minus one output interval)
+        let ls = seed["shear_lockstep"]["last_agree_step"].as_u64().unwrap();
+        let chaos = seed["shear_chaos_baseline"]["last_agree_step"]
+            .as_u64()
+            .unwrap();
+        assert!(
+            ls + 20 >= chaos && ls >= 20,
+            "shear lockstep {ls} vs chaos baseline {chaos}"
+        );
+        assert!(seed["horizon"]["last_agree_step"].as_u64().unwrap() >= 500);
+    }
+    for f in [
+        "mu_strain.svg",
+        "top_force.svg",
+        "height.svg",
+        "kinetic_energy.svg",
+    ] {
+        let t = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(
+            t.contains("LIGGGHTS seed 1") && t.contains("native seed 1"),
+            "{f}"
+        );
+    }
+    for f in [
+        "liggghts.csv",
+        "native.csv",
+        "initial_packing.csv",
+        "case.toml",
+        "liggghts/in.deck",
+        "liggghts/log.liggghts",
+    ] {
+        assert!(out.join("seed1").join(f).is_file(), "missing {f}");
+    }
+}
+
+#[test]
+fn native_only_resumes_and_writes_snapshots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let args = [
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.05",
+        "--native-only",
+        "--snapshot-every",
+        "5000",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = verify(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let vtk: Vec<_> = std::fs::read_dir(out.join("seed1/vtk")).unwrap().collect();
+    assert!(vtk.len() >= 3, "expected VTK snapshots, got {}", vtk.len());
+    let o = verify(&args);
+    assert!(
+        text(&o).contains("native result found, reused"),
+        "{}",
+        text(&o)
+    );
+    // the normal stress is held by the servo in the native run
+    let s = summary(&out);
+    let stress = s["native"]["per_seed_stress"][0].as_f64().unwrap();
+    assert!((stress / 10e6 - 1.0).abs() < 0.1, "stress {stress}");
+}
+
+#[test]
+fn bad_shear_input_is_refused_with_reasons() {
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &["--rolling", "epsd2", "--mu-r", "0.5", "--eta-r", "0.5"],
+            "eta_r acts only in epsd and epsd3",
+        ),
+        (
+            &["--preset", "huge"],
+            "unknown preset `huge`; valid: ci, fast, paper",
+        ),
+        (&["--speeds", "5.0"], "--allow-inertial"),
+        (&["--mu-r", "nan"], "--mu-r"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["shear", "--native-only"];
+        if !extra.contains(&"--preset") {
+            args.extend_from_slice(&["--preset", "ci"]);
+        }
+        args.extend_from_slice(extra);
+        let o = verify(&args);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", text(&o));
+        assert!(text(&o).contains(expect), "{extra:?}: {}", text(&o));
+    }
+}
+
+#[test]
+fn failing_liggghts_keeps_partial_outputs_and_shows_the_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("liggghts");
+    std::fs::write(&fake, "#!/bin/sh\necho 'Step f_top[1]' > log.liggghts\necho 'ERROR: Lost atoms: original 300 current 299' >> log.liggghts\nexit 1\n").unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let out = dir.path().join("out");
+    let o = verify(&[
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.05",
+        "--liggghts",
+        fake.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("Lost atoms"), "{}", text(&o));
+    assert!(out.join("seed1/liggghts/in.deck").is_file());
+    assert!(out.join("seed1/initial_packing.csv").is_file());
+}
