@@ -47,6 +47,8 @@ pub enum Command {
     Contact(ContactArgs),
     /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
     Shear(crate::cli_shear::ShearArgs),
+    /// Throughput of both codes on the same dense shear state (particle-steps per second).
+    Bench(crate::bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
     Decks {
         #[arg(long, default_value = "liggghts_inputs")]
@@ -96,6 +98,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Contact(a) => contact(a),
         Command::Shear(a) => crate::cli_shear::shear(a),
+        Command::Bench(a) => crate::bench::bench(a),
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());

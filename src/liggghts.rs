@@ -20,6 +20,8 @@ pub const LOG_NAME: &str = "log.liggghts";
 pub struct Liggghts {
     pub binary: PathBuf,
     pub timeout: Duration,
+    /// Run on this many MPI processes (`mpirun --allow-run-as-root -np N`); None: serial.
+    pub mpi_procs: Option<usize>,
 }
 
 /// Finds `name` on PATH (or accepts an explicit path that exists).
@@ -41,7 +43,11 @@ impl Liggghts {
         let binary = which(name).ok_or_else(|| Error::LiggghtsMissing {
             binary: name.display().to_string(),
         })?;
-        Ok(Liggghts { binary, timeout })
+        Ok(Liggghts {
+            binary,
+            timeout,
+            mpi_procs: None,
+        })
     }
 
     /// Debian package version of LIGGGHTS if dpkg knows it, else the binary path.
@@ -81,7 +87,16 @@ impl Liggghts {
         let out = std::fs::File::create(&screen).map_err(|e| Error::io(&screen, e))?;
         let err = out.try_clone().map_err(|e| Error::io(&screen, e))?;
         // stdout is redirected to a file: `-screen none` crashes LIGGGHTS 3.8 with STL meshes.
-        let mut child = Command::new(&self.binary)
+        let mut cmd = match self.mpi_procs {
+            Some(n) => {
+                let mut c = Command::new("mpirun");
+                c.args(["--allow-run-as-root", "-np", &n.to_string()])
+                    .arg(&self.binary);
+                c
+            }
+            None => Command::new(&self.binary),
+        };
+        let mut child = cmd
             .args(["-in", DECK_NAME, "-log", LOG_NAME])
             .current_dir(dir)
             .stdin(Stdio::null())
@@ -308,4 +323,28 @@ mod tests {
             ]
         );
     }
+}
+
+/// Wall time of the last `run` in a LIGGGHTS log: `Loop time of T on P procs for N steps`.
+pub fn last_loop_time(log: &Path) -> Result<(f64, u64)> {
+    let text = read_to_string(log)?;
+    text.lines()
+        .rev()
+        .find_map(|l| {
+            let rest = l.strip_prefix("Loop time of ")?;
+            let mut it = rest.split_whitespace();
+            let t: f64 = it.next()?.parse().ok()?;
+            let steps: u64 = rest
+                .split(" for ")
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()?;
+            Some((t, steps))
+        })
+        .ok_or_else(|| Error::Parse {
+            path: log.to_path_buf(),
+            msg: "no `Loop time of` line".into(),
+        })
 }

@@ -1,0 +1,291 @@
+//! `verify bench`: throughput of both codes on the same dense shear state, measured in the
+//! same invocation. The state is the native solver's compacted `fast`/`paper` sample, tiled
+//! periodically in x and z for larger particle counts. Each code runs a warm-up run, then the
+//! timed run of the same number of steps with output only at its end; LIGGGHTS' time is its
+//! own `Loop time` of the timed run (setup and file reading excluded).
+
+use crate::cli::{utc_stamp, Outcome};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::liggghts::{last_loop_time, Liggghts, LOG_NAME};
+use crate::packing::{loose_packing, Packing};
+use crate::solver::shear::ShearSim;
+use crate::spec::shear::{ShearCase, Stage};
+use crate::spec::RollingModel;
+use clap::Args;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Parameter preset of the state: fast or paper (same particles and materials).
+    #[arg(long, default_value = "fast")]
+    pub preset: String,
+    /// Timed steps per code.
+    #[arg(long, default_value_t = 2000)]
+    pub steps: u64,
+    /// Native thread counts to measure.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub threads: Vec<usize>,
+    /// LIGGGHTS process counts to measure (2 runs `mpirun --allow-run-as-root -np 2`).
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub procs: Vec<usize>,
+    /// Particle count: the 2500-particle sample tiled k x k times (rounded to a square).
+    #[arg(long, default_value_t = 2500)]
+    pub particles: usize,
+    /// Compression steps that make the dense state.
+    #[arg(long, default_value_t = 40_000)]
+    pub compression_steps: u64,
+    /// Skip LIGGGHTS (native only).
+    #[arg(long)]
+    pub native_only: bool,
+    #[arg(long)]
+    pub liggghts: Option<PathBuf>,
+    /// Output directory (default: a new directory under ./runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchRow {
+    pub code: String,
+    /// Threads (native) or MPI processes (LIGGGHTS).
+    pub workers: usize,
+    pub particles: usize,
+    pub steps: u64,
+    pub seconds: f64,
+    pub particle_steps_per_s: f64,
+    pub per_core: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    pub preset: String,
+    pub rolling: String,
+    pub particles: usize,
+    pub rows: Vec<BenchRow>,
+    /// native 1 thread / LIGGGHTS 1 process.
+    pub native_vs_liggghts_1: Option<f64>,
+    /// native 2 threads / native 1 thread.
+    pub native_2_vs_1: Option<f64>,
+    /// Resident memory per particle of the native solver [bytes] (peak RSS growth while the
+    /// state was built and run, divided by the particle count).
+    pub native_bytes_per_particle: Option<f64>,
+    /// Estimated wall time of one full `paper` run (3 stages) per code [hours].
+    pub paper_run_hours: Vec<(String, f64)>,
+    pub date_utc: String,
+}
+
+/// Peak resident set size of this process [bytes] (Linux `VmHWM`).
+fn peak_rss() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/status").ok()?;
+    let l = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = l.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
+/// Tiles a sample k x k times in x and z.
+pub fn tile(case: &ShearCase, p: &Packing, k: usize) -> (ShearCase, Packing) {
+    let mut c = case.clone();
+    c.box_x *= k as f64;
+    c.box_z *= k as f64;
+    c.particles *= k * k;
+    let mut q = Packing {
+        radius: Vec::new(),
+        position: Vec::new(),
+        velocity: Vec::new(),
+        omega: Vec::new(),
+        ..p.clone()
+    };
+    for ix in 0..k {
+        for iz in 0..k {
+            for i in 0..p.radius.len() {
+                q.radius.push(p.radius[i]);
+                let x = p.position[i];
+                q.position.push([
+                    x[0] + ix as f64 * case.box_x,
+                    x[1],
+                    x[2] + iz as f64 * case.box_z,
+                ]);
+                q.velocity.push(p.velocity[i]);
+                q.omega.push(p.omega[i]);
+            }
+        }
+    }
+    (c, q)
+}
+
+pub fn bench(a: BenchArgs) -> Result<Outcome> {
+    if a.steps == 0 {
+        return Err(Error::invalid("--steps", 0, ">= 1"));
+    }
+    if a.threads.contains(&0) || a.procs.contains(&0) {
+        return Err(Error::invalid("--threads/--procs", 0, ">= 1"));
+    }
+    let base = ShearCase::preset(&a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
+    base.validate(false)?;
+    let k = ((a.particles as f64 / base.particles as f64).sqrt().round() as usize).max(1);
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(format!("bench-{}", utc_stamp())));
+    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+    let rss0 = peak_rss();
+    println!(
+        "verify bench: compacting the {} sample ({} particles, {} steps)...",
+        a.preset, base.particles, a.compression_steps
+    );
+    let loose = loose_packing(&base);
+    let mut sim = ShearSim::new(&base, &loose);
+    sim.setup(0.0)?;
+    for _ in 0..a.compression_steps {
+        sim.step()?;
+    }
+    let dense = sim.state(&loose);
+    drop(sim);
+    let (case, state) = tile(&base, &dense, k);
+    let n = state.radius.len();
+    println!(
+        "  state: {n} particles ({k} x {k} tiles), {} timed steps per code, warm-up {} steps",
+        a.steps,
+        a.steps / 4
+    );
+    // A run of both codes: 1 servo step, warm-up run, timed run.
+    let warm = (a.steps / 4).max(1);
+    let mut c = case.clone();
+    c.compression_steps = 1;
+    let speed = base.stages[0].speed;
+    let h = c.estimated_height();
+    c.stages = vec![
+        Stage {
+            speed,
+            strain: warm as f64 * speed * c.dt / h,
+        },
+        Stage {
+            speed,
+            strain: a.steps as f64 * speed * c.dt / h,
+        },
+    ];
+    let steps = c.stage_steps();
+    c.output_every = c.total_steps();
+    c.snapshot_every = 0;
+    let mut rows = Vec::new();
+    let mut rss_native = None;
+    for &t in &a.threads {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
+        let secs = pool.install(|| -> Result<f64> {
+            let mut s = ShearSim::new(&c, &state);
+            s.setup(0.0)?;
+            s.step()?;
+            s.setup(speed)?;
+            for _ in 0..steps[0] {
+                s.step()?;
+            }
+            s.setup(speed)?;
+            let t0 = Instant::now();
+            for _ in 0..steps[1] {
+                s.step()?;
+            }
+            let el = t0.elapsed().as_secs_f64();
+            s.check_finite()?;
+            Ok(el)
+        })?;
+        if rss_native.is_none() {
+            rss_native = match (rss0, peak_rss()) {
+                (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
+                _ => None,
+            };
+        }
+        let r = steps[1] as f64 * n as f64 / secs;
+        println!(
+            "  native   {t} thread(s): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)",
+            r / t as f64
+        );
+        rows.push(BenchRow {
+            code: "native".into(),
+            workers: t,
+            particles: n,
+            steps: steps[1],
+            seconds: secs,
+            particle_steps_per_s: r,
+            per_core: r / t as f64,
+        });
+    }
+    if !a.native_only {
+        for &p in &a.procs {
+            let mut lig =
+                Liggghts::locate(a.liggghts.as_deref(), Duration::from_secs(7 * 24 * 3600))?;
+            if p > 1 {
+                lig.mpi_procs = Some(p);
+            }
+            let dir = out.join(format!("liggghts_np{p}"));
+            std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+            lig.run(&crate::deck::shear::shear_deck(&c, &state), &dir)?;
+            let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
+            let r = st as f64 * n as f64 / secs;
+            println!("  LIGGGHTS {p} process(es): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)", r / p as f64);
+            rows.push(BenchRow {
+                code: "liggghts".into(),
+                workers: p,
+                particles: n,
+                steps: st,
+                seconds: secs,
+                particle_steps_per_s: r,
+                per_core: r / p as f64,
+            });
+        }
+    }
+    let get = |code: &str, w: usize| {
+        rows.iter()
+            .find(|r| r.code == code && r.workers == w)
+            .map(|r| r.particle_steps_per_s)
+    };
+    let native_vs_liggghts_1 = get("native", 1).zip(get("liggghts", 1)).map(|(a, b)| a / b);
+    let native_2_vs_1 = get("native", 2).zip(get("native", 1)).map(|(a, b)| a / b);
+    // one paper run: 2500 particles, the paper preset's steps
+    let paper = ShearCase::preset("paper", RollingModel::Epsd, 0.5, 0.5, 1)?;
+    let paper_ps = paper.total_steps() as f64 * paper.particles as f64;
+    let mut paper_run_hours = Vec::new();
+    for r in &rows {
+        paper_run_hours.push((
+            format!("{} x{}", r.code, r.workers),
+            paper_ps / r.particle_steps_per_s / 3600.0,
+        ));
+    }
+    let report = BenchReport {
+        preset: a.preset.clone(),
+        rolling: "epsd".into(),
+        particles: n,
+        rows,
+        native_vs_liggghts_1,
+        native_2_vs_1,
+        native_bytes_per_particle: rss_native,
+        paper_run_hours,
+        date_utc: utc_stamp(),
+    };
+    if let Some(x) = native_vs_liggghts_1 {
+        println!("  native 1 thread / LIGGGHTS 1 process = {x:.2}");
+    }
+    if let Some(x) = native_2_vs_1 {
+        println!("  native 2 threads / native 1 thread = {x:.2}");
+    }
+    if let Some(b) = rss_native {
+        println!("  native memory: {b:.0} bytes per particle (peak RSS growth)");
+    }
+    for (who, hrs) in &report.paper_run_hours {
+        println!(
+            "  estimated full paper run ({} steps x 2500 particles): {who}: {hrs:.1} h",
+            paper.total_steps()
+        );
+    }
+    write_atomic(
+        &out.join("bench.json"),
+        serde_json::to_string_pretty(&report)?.as_bytes(),
+    )?;
+    println!("bench.json: {}", out.join("bench.json").display());
+    Ok(Outcome::Agree)
+}
