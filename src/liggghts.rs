@@ -305,26 +305,6 @@ pub fn last_thermo_step(log: &Path, ncol: usize) -> Option<u64> {
     parse_thermo(&text, ncol).last().map(|r| r.0)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn thermo_keeps_first_row_of_each_step() {
-        let log =
-            "Step a b\n 0 1 2\n 100 3 4\nLoop time of 1\nStep a b\n 100 6 8\n 200 5 6\nLoop time\n";
-        let r = parse_thermo(log, 2);
-        assert_eq!(
-            r,
-            vec![
-                (0, vec![1.0, 2.0]),
-                (100, vec![3.0, 4.0]),
-                (200, vec![5.0, 6.0])
-            ]
-        );
-    }
-}
-
 /// Wall time of the last `run` in a LIGGGHTS log: `Loop time of T on P procs for N steps`.
 pub fn last_loop_time(log: &Path) -> Result<(f64, u64)> {
     let text = read_to_string(log)?;
@@ -347,4 +327,24 @@ pub fn last_loop_time(log: &Path) -> Result<(f64, u64)> {
             path: log.to_path_buf(),
             msg: "no `Loop time of` line".into(),
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thermo_keeps_first_row_of_each_step() {
+        let log =
+            "Step a b\n 0 1 2\n 100 3 4\nLoop time of 1\nStep a b\n 100 6 8\n 200 5 6\nLoop time\n";
+        let r = parse_thermo(log, 2);
+        assert_eq!(
+            r,
+            vec![
+                (0, vec![1.0, 2.0]),
+                (100, vec![3.0, 4.0]),
+                (200, vec![5.0, 6.0])
+            ]
+        );
+    }
 }
