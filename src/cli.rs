@@ -47,6 +47,8 @@ pub enum Command {
     Contact(ContactArgs),
     /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
     Shear(crate::cli_shear::ShearArgs),
+    /// Time-step convergence: the same case from the same compacted state at smaller dt.
+    Convergence(crate::cli_convergence::ConvergenceArgs),
     /// Throughput of both codes on the same dense shear state (particle-steps per second).
     Bench(crate::bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
@@ -99,6 +101,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Contact(a) => contact(a),
         Command::Shear(a) => crate::cli_shear::shear(a),
         Command::Bench(a) => crate::bench::bench(a),
+        Command::Convergence(a) => crate::cli_convergence::convergence(a),
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());

@@ -62,6 +62,9 @@ pub struct ShearArgs {
     /// Write particle snapshots (VTK, for ParaView) every N steps (0: the preset's choice).
     #[arg(long, default_value_t = 0)]
     pub snapshot_every: u64,
+    /// Refuse to run (exit 2) when the explicit rolling dashpot is expected to be unstable.
+    #[arg(long)]
+    pub strict_stability: bool,
     /// LIGGGHTS binary.
     #[arg(long)]
     pub liggghts: Option<PathBuf>,
@@ -249,6 +252,7 @@ pub struct ShearSummary {
     pub inertial_numbers: Vec<f64>,
     pub kappa: f64,
     pub steady_window_steps: (u64, u64),
+    pub stability: crate::spec::stability_shear::StabilityReport,
     pub liggghts: Option<Steady>,
     pub native: Option<Steady>,
     pub seeds: Vec<SeedResult>,
@@ -309,6 +313,26 @@ pub fn shear(a: ShearArgs) -> Result<Outcome> {
     );
     for w in &cases[0].1 {
         eprintln!("warning: {w}");
+    }
+    let stab = crate::spec::stability_shear::stability(case0);
+    println!("  stability (worst first; S = n (omega_r^2 dt^2 + 2 lambda dt), explicit dashpot unstable at S >= 4):");
+    for l in stab.lines(3) {
+        println!("    {l}");
+    }
+    if !stab.stable {
+        let msg = format!(
+            "the explicit rolling dashpot is expected to be unstable at dt = {:e} s (worst: {}, S = {:.2}); \
+             results may show spurious rotational energy and friction weakening: check with `verify convergence`",
+            case0.dt, stab.entries[0].contact, stab.entries[0].criterion
+        );
+        if a.strict_stability {
+            return Err(Error::invalid(
+                "dt",
+                case0.dt,
+                format!("a stable explicit rolling dashpot (--strict-stability): {msg}"),
+            ));
+        }
+        eprintln!("warning: {msg}");
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -469,6 +493,7 @@ pub fn shear(a: ShearArgs) -> Result<Outcome> {
         inertial_numbers: inertial,
         kappa: case0.kappa(),
         steady_window_steps: window,
+        stability: stab.clone(),
         liggghts: ls.clone(),
         native: ns.clone(),
         seeds,

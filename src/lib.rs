@@ -9,6 +9,7 @@
 
 pub mod bench;
 pub mod cli;
+pub mod cli_convergence;
 pub mod cli_shear;
 pub mod compare;
 pub mod deck;

@@ -9,6 +9,7 @@
 mod builtin;
 pub mod shear;
 mod stability;
+pub mod stability_shear;
 
 pub use builtin::{builtin_case, builtin_names, BUILTIN_CASES};
 pub use stability::{hertz_collision, rayleigh_time, HertzCollision};

@@ -1,0 +1,352 @@
+//! `verify convergence`: the same shear case from the same compacted state at successively
+//! smaller time steps (same strain), to tell physics from time-step artefacts such as the
+//! unstable explicit rolling dashpot (see [`crate::spec::stability_shear`]).
+
+use crate::cli::{utc_stamp, Outcome};
+use crate::cli_shear::{shear_case, ShearArgs};
+use crate::compare::{mean_ci95, steady, steady_window, Steady};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::liggghts::Liggghts;
+use crate::packing::loose_packing;
+use crate::report::plot::{line_plot, Curve};
+use crate::report::progress::Progress;
+use crate::series::Series;
+use crate::shear::{run_ends, run_liggghts, run_native, write_series};
+use crate::solver::shear::ShearSim;
+use crate::spec::stability_shear::{stability, StabilityReport};
+use clap::Args;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+#[derive(Args, Debug, Clone)]
+pub struct ConvergenceArgs {
+    #[arg(long, default_value_t = 0.0)]
+    pub mu_r: f64,
+    #[arg(long, default_value_t = 0.0)]
+    pub eta_r: f64,
+    #[arg(long, default_value = "epsd")]
+    pub rolling: String,
+    #[arg(long, default_value = "fast")]
+    pub preset: String,
+    /// Factors applied to the preset's dt, largest first.
+    #[arg(long, value_delimiter = ',', default_value = "1,0.5,0.25")]
+    pub dt_factors: Vec<f64>,
+    /// native, liggghts or both.
+    #[arg(long, default_value = "native")]
+    pub engine: String,
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    #[arg(long)]
+    pub strain: Option<f64>,
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[arg(long)]
+    pub liggghts: Option<PathBuf>,
+    #[arg(long)]
+    pub allow_inertial: bool,
+}
+
+/// Figures of one (dt, code).
+#[derive(Clone, Debug, Serialize)]
+pub struct DtPoint {
+    pub code: String,
+    pub dt_factor: f64,
+    pub dt: f64,
+    pub steady: Steady,
+    /// Mean rotational kinetic energy in the steady window, over seeds [J], with 95 % CI.
+    pub erot: f64,
+    pub erot_ci95: f64,
+    pub stability: StabilityReport,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ConvergenceSummary {
+    pub converged: bool,
+    /// Largest dt factor from which every step to the next smaller dt agrees within the CIs
+    /// (over codes: the smallest such factor).
+    pub largest_converged_factor: Option<f64>,
+    pub points: Vec<DtPoint>,
+    pub date_utc: String,
+}
+
+pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
+    if a.dt_factors.is_empty()
+        || a.dt_factors
+            .iter()
+            .any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0))
+    {
+        return Err(Error::invalid(
+            "--dt-factors",
+            format!("{:?}", a.dt_factors),
+            "factors in (0, 1], e.g. 1,0.5,0.25",
+        ));
+    }
+    let (run_nat, run_lig) = match a.engine.as_str() {
+        "native" => (true, false),
+        "liggghts" => (false, true),
+        "both" => (true, true),
+        e => {
+            return Err(Error::Unknown {
+                what: "engine",
+                name: e.into(),
+                valid: "native, liggghts, both".into(),
+            })
+        }
+    };
+    let lig = if run_lig {
+        Some(Liggghts::locate(
+            a.liggghts.as_deref(),
+            Duration::from_secs(7 * 24 * 3600),
+        )?)
+    } else {
+        None
+    };
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(format!("convergence-{}", utc_stamp())));
+    let sargs = ShearArgs {
+        mu_r: a.mu_r,
+        eta_r: a.eta_r,
+        rolling: a.rolling.clone(),
+        preset: a.preset.clone(),
+        seeds: a.seeds,
+        speeds: None,
+        strain: a.strain,
+        threads: None,
+        out: None,
+        native_only: !run_lig,
+        liggghts_only: !run_nat,
+        allow_inertial: a.allow_inertial,
+        liggghts: None,
+        timeout: 0,
+        snapshot_every: 0,
+        strict_stability: false,
+    };
+    let mut factors = a.dt_factors.clone();
+    factors.sort_by(|x, y| y.total_cmp(x));
+    println!(
+        "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
+        a.preset,
+        a.engine,
+        a.seeds,
+        out.display()
+    );
+    // per seed: the compacted state at the preset's dt (native), shared by every dt and code
+    let mut per: Vec<(String, f64, Vec<Series>)> = Vec::new();
+    let mut stab = Vec::new();
+    for seed in 1..=a.seeds {
+        let (case, _) = shear_case(&sargs, seed)?;
+        let loose = loose_packing(&case);
+        let mut sim = ShearSim::new(&case, &loose);
+        sim.setup(0.0)?;
+        for _ in 0..case.compression_steps {
+            sim.step()?;
+        }
+        let state = sim.state(&loose);
+        for &f in &factors {
+            let mut c = case.clone();
+            c.dt = case.dt * f;
+            c.compression_steps = 1;
+            c.output_every = ((case.output_every as f64 / f).round() as u64).max(1);
+            c.snapshot_every = 0;
+            if seed == 1 {
+                stab.push(stability(&c));
+            }
+            let dir = out.join(format!("dt{f}")).join(format!("seed{seed}"));
+            std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+            for (code, on) in [("native", run_nat), ("liggghts", run_lig)] {
+                if !on {
+                    continue;
+                }
+                println!(
+                    "  seed {seed}, dt factor {f} ({:e} s), {code}: {} steps",
+                    c.dt,
+                    c.total_steps()
+                );
+                let run = if code == "native" {
+                    run_native(&c, &state, &dir, &Progress::hidden())?
+                } else {
+                    run_liggghts(
+                        &c,
+                        &state,
+                        lig.as_ref().expect("located"),
+                        &dir,
+                        &Progress::hidden(),
+                    )?
+                };
+                let s = write_series(&c, &run, &dir.join(format!("{code}.csv")))?;
+                match per.iter_mut().find(|p| p.0 == code && p.1 == f) {
+                    Some(p) => p.2.push(s),
+                    None => per.push((code.to_string(), f, vec![s])),
+                }
+            }
+        }
+    }
+    let (case0, _) = shear_case(&sargs, 1)?;
+    let mut points = Vec::new();
+    for (code, f, series) in &per {
+        let mut c = case0.clone();
+        c.dt = case0.dt * f;
+        c.compression_steps = 1;
+        let ends = run_ends(&c);
+        let window = steady_window(ends[ends.len() - 2], ends[ends.len() - 1]);
+        let st = steady(series, window, c.box_x * c.box_z);
+        let erots: Vec<f64> = series
+            .iter()
+            .map(|s| window_mean(s, "erot[J]", window))
+            .collect();
+        let (erot, erot_ci95) = mean_ci95(&erots);
+        let k = factors.iter().position(|x| x == f).unwrap_or(0);
+        points.push(DtPoint {
+            code: code.clone(),
+            dt_factor: *f,
+            dt: c.dt,
+            steady: st,
+            erot,
+            erot_ci95,
+            stability: stab[k].clone(),
+        });
+    }
+    // verdict per code: converged when the two smallest dt agree within their CIs
+    let mut converged = true;
+    let mut largest: Option<f64> = None;
+    for code in ["native", "liggghts"] {
+        let pts: Vec<&DtPoint> = points.iter().filter(|p| p.code == code).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let finest = pts.last().expect("non-empty");
+        if pts.len() >= 2 {
+            let prev = pts[pts.len() - 2];
+            converged &= (prev.steady.mu - finest.steady.mu).abs()
+                <= prev.steady.mu_ci95 + finest.steady.mu_ci95;
+        } else {
+            converged = false;
+        }
+        // walk up from the finest dt while each step agrees with the next finer one
+        let agree = |x: &DtPoint, y: &DtPoint| {
+            (x.steady.mu - y.steady.mu).abs() <= x.steady.mu_ci95 + y.steady.mu_ci95
+        };
+        let mut lc = Some(finest.dt_factor);
+        for k in (0..pts.len().saturating_sub(1)).rev() {
+            if agree(pts[k], pts[k + 1]) {
+                lc = Some(pts[k].dt_factor);
+            } else {
+                break;
+            }
+        }
+        largest = match (largest, lc) {
+            (Some(x), Some(y)) => Some(x.min(y)),
+            (None, y) => y,
+            (x, None) => x,
+        };
+    }
+    println!(
+        "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",
+        "code", "dt factor", "dt [s]", "steady mu (95 % CI)", "E_rot [J] (95 % CI)", "S max"
+    );
+    for p in &points {
+        println!(
+            "  {:<9} {:>9} {:>10.3e} {:>9.4} +- {:<6.4} {:>11.3e} +- {:<8.2e} {:>8.2}",
+            p.code,
+            p.dt_factor,
+            p.dt,
+            p.steady.mu,
+            p.steady.mu_ci95,
+            p.erot,
+            p.erot_ci95,
+            p.stability.entries[0].criterion
+        );
+    }
+    println!(
+        "  verdict: {}; largest converged dt factor: {}",
+        if converged {
+            "converged (the two smallest dt agree within their CIs)"
+        } else {
+            "NOT converged"
+        },
+        largest
+            .map(|f| f.to_string())
+            .unwrap_or_else(|| "none".into())
+    );
+    plots(&out, &points)?;
+    let summary = ConvergenceSummary {
+        converged,
+        largest_converged_factor: largest,
+        points,
+        date_utc: utc_stamp(),
+    };
+    write_atomic(
+        &out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!(
+        "  plots: {} and erot_dt.svg; summary: {}",
+        out.join("mu_dt.svg").display(),
+        out.join("summary.json").display()
+    );
+    Ok(if converged {
+        Outcome::Agree
+    } else {
+        Outcome::Disagree
+    })
+}
+
+fn window_mean(s: &Series, col: &str, w: (u64, u64)) -> f64 {
+    let c = s.col(col).expect("column");
+    let v: Vec<f64> = s
+        .steps
+        .iter()
+        .zip(&s.rows)
+        .filter(|(st, _)| **st > w.0 && **st <= w.1)
+        .map(|(_, r)| r[c])
+        .collect();
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
+    for (file, title, ylab, get) in [
+        (
+            "mu_dt.svg",
+            "steady friction coefficient against time step",
+            "mu",
+            (|p: &DtPoint| p.steady.mu) as fn(&DtPoint) -> f64,
+        ),
+        (
+            "erot_dt.svg",
+            "mean rotational kinetic energy against time step",
+            "E_rot [J]",
+            |p: &DtPoint| p.erot,
+        ),
+    ] {
+        let data: Vec<(String, usize, Vec<(f64, f64)>)> = ["liggghts", "native"]
+            .iter()
+            .enumerate()
+            .map(|(k, code)| {
+                (
+                    code.to_string(),
+                    k,
+                    points
+                        .iter()
+                        .filter(|p| p.code == *code)
+                        .map(|p| (p.dt, get(p)))
+                        .collect(),
+                )
+            })
+            .filter(|d: &(String, usize, Vec<(f64, f64)>)| !d.2.is_empty())
+            .collect();
+        let curves: Vec<Curve> = data
+            .iter()
+            .map(|(l, c, p)| Curve {
+                label: l.clone(),
+                points: p,
+                color: *c,
+            })
+            .collect();
+        line_plot(&out.join(file), title, "dt [s]", ylab, &curves)?;
+    }
+    Ok(())
+}
