@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
-use crate::report::plot::{line_plot, Curve};
+use crate::report::plot::{curves, line_plot, CurveData};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_series};
@@ -322,7 +322,7 @@ fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
             |p: &DtPoint| p.erot,
         ),
     ] {
-        let data: Vec<(String, usize, Vec<(f64, f64)>)> = ["liggghts", "native"]
+        let data: Vec<CurveData> = ["liggghts", "native"]
             .iter()
             .enumerate()
             .map(|(k, code)| {
@@ -336,17 +336,9 @@ fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
                         .collect(),
                 )
             })
-            .filter(|d: &(String, usize, Vec<(f64, f64)>)| !d.2.is_empty())
+            .filter(|d: &CurveData| !d.2.is_empty())
             .collect();
-        let curves: Vec<Curve> = data
-            .iter()
-            .map(|(l, c, p)| Curve {
-                label: l.clone(),
-                points: p,
-                color: *c,
-            })
-            .collect();
-        line_plot(&out.join(file), title, "dt [s]", ylab, &curves)?;
+        line_plot(&out.join(file), title, "dt [s]", ylab, &curves(&data))?;
     }
     Ok(())
 }

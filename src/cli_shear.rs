@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
-use crate::report::plot::{line_plot, Curve};
+use crate::report::plot::{curves, line_plot, CurveData};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_packing, CodeRun, Row};
@@ -663,8 +663,7 @@ fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
             "E_rot [J]",
         ),
     ] {
-        type Labelled = (String, usize, Vec<(f64, f64)>);
-        let pts: Vec<Labelled> = data
+        let pts: Vec<CurveData> = data
             .iter()
             .map(|(l, c, s)| {
                 let mut p = xy(s, x, y);
@@ -674,15 +673,7 @@ fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
                 (l.clone(), *c, p)
             })
             .collect();
-        let curves: Vec<Curve> = pts
-            .iter()
-            .map(|(l, c, p)| Curve {
-                label: l.clone(),
-                points: p,
-                color: *c,
-            })
-            .collect();
-        line_plot(&out.join(file), title, xd, yd, &curves)?;
+        line_plot(&out.join(file), title, xd, yd, &curves(&pts))?;
     }
     Ok(())
 }

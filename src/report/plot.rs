@@ -4,6 +4,20 @@ use crate::error::{Error, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
+/// Owned data of a curve: label, colour index, points.
+pub type CurveData = (String, usize, Vec<(f64, f64)>);
+
+/// Borrows owned curve data as [`Curve`]s.
+pub fn curves(data: &[CurveData]) -> Vec<Curve<'_>> {
+    data.iter()
+        .map(|(l, c, p)| Curve {
+            label: l.clone(),
+            points: p,
+            color: *c,
+        })
+        .collect()
+}
+
 /// One curve: label, points, colour index (0 LIGGGHTS blue, 1 native orange, 2.. others).
 pub struct Curve<'a> {
     pub label: String,
