@@ -4,8 +4,14 @@ use dem_verify::solver::shear::ShearSim;
 use dem_verify::spec::{shear::ShearCase, RollingModel};
 
 fn main() {
-    let n: u64 = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(2000);
-    rayon::ThreadPoolBuilder::new().num_threads(1).build_global().unwrap();
+    let n: u64 = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2000);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global()
+        .unwrap();
     let c = ShearCase::preset("fast", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
     let p = loose_packing(&c);
     let mut s = ShearSim::new(&c, &p);
@@ -18,5 +24,8 @@ fn main() {
     for _ in 0..n {
         s.step().unwrap();
     }
-    eprintln!("{:.3e} particle-steps/s", n as f64 * 2500.0 / t.elapsed().as_secs_f64());
+    eprintln!(
+        "{:.3e} particle-steps/s",
+        n as f64 * 2500.0 / t.elapsed().as_secs_f64()
+    );
 }

@@ -7,7 +7,6 @@ use super::{num, Deck};
 use crate::packing::Packing;
 use crate::solver::shear::plate::{plate_triangles, Plate, Side};
 use crate::spec::shear::ShearCase;
-use crate::spec::RollingModel;
 use std::fmt::Write;
 
 pub const BOTTOM_STL: &str = "bottom.stl";
@@ -73,68 +72,8 @@ pub fn shear_deck(case: &ShearCase, packing: &Packing) -> Deck {
     writeln!(w, "read_data {}", super::DATA_NAME).unwrap();
     writeln!(w, "neighbor {} bin", num(case.skin)).unwrap();
     writeln!(w, "neigh_modify delay 0").unwrap();
-    writeln!(
-        w,
-        "fix m1 all property/global youngsModulus peratomtype {}",
-        num(m.youngs_modulus)
-    )
-    .unwrap();
-    writeln!(
-        w,
-        "fix m2 all property/global poissonsRatio peratomtype {}",
-        num(m.poisson_ratio)
-    )
-    .unwrap();
-    writeln!(
-        w,
-        "fix m3 all property/global coefficientRestitution peratomtypepair 1 {}",
-        num(m.restitution)
-    )
-    .unwrap();
-    writeln!(
-        w,
-        "fix m4 all property/global coefficientFriction peratomtypepair 1 {}",
-        num(m.friction)
-    )
-    .unwrap();
-    if rolling != RollingModel::Off {
-        writeln!(
-            w,
-            "fix m5 all property/global coefficientRollingFriction peratomtypepair 1 {}",
-            num(m.rolling_friction)
-        )
-        .unwrap();
-    }
-    if rolling.has_damping() {
-        writeln!(
-            w,
-            "fix m6 all property/global coefficientRollingViscousDamping peratomtypepair 1 {}",
-            num(m.rolling_damping)
-        )
-        .unwrap();
-    }
-    if rolling == RollingModel::Epsd3 {
-        writeln!(
-            w,
-            "fix m7 all property/global rollingStiffness scalar {}",
-            num(m.rolling_stiffness)
-        )
-        .unwrap();
-    }
-    let (mut models, mut settings) = ("model hertz tangential history".to_string(), String::new());
-    if rolling != RollingModel::Off {
-        write!(models, " rolling_friction {}", rolling.keyword()).unwrap();
-        write!(
-            settings,
-            " torsionTorque {}",
-            if case.models.torsion_torque {
-                "on"
-            } else {
-                "off"
-            }
-        )
-        .unwrap();
-    }
+    super::material_fixes(w, m, rolling);
+    let (models, settings) = super::model_args(&case.models);
     writeln!(w, "pair_style gran {models}{settings}").unwrap();
     writeln!(w, "pair_coeff * *").unwrap();
     writeln!(w, "timestep {}", num(case.dt)).unwrap();

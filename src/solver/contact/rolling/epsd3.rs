@@ -2,7 +2,7 @@
 
 use super::super::normal::NormalForce;
 use super::super::ContactData;
-use super::{reff, relative_rotation, rolling_inertia, spring, tangential_part};
+use super::spring_dashpot;
 use crate::solver::material::PairParams;
 use crate::solver::vec3::V3;
 
@@ -16,23 +16,10 @@ pub fn torque(
     hist: &mut V3,
     update_history: bool,
 ) -> V3 {
-    let reff = reff(cd);
-    let r_inertia = rolling_inertia(cd, reff);
-    let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
     let rmu = p.coeff_roll_frict;
-    let kr = p.coeff_roll_stiffness * nf.kn * rmu * rmu * reff * reff;
-    let m_max = nf.fn_.abs() * reff * rmu;
-    let (mut m, capped) = spring(*hist, wr_tot, kr, p.dt, m_max);
-    if update_history {
-        *hist = m;
-    }
-    if !capped {
-        let r_coef = p.coeff_roll_visc * 2.0 * (r_inertia * kr).sqrt();
-        for k in 0..3 {
-            m[k] += r_coef * wr_tot[k];
-        }
-    }
-    m
+    spring_dashpot(cd, nf, p, hist, update_history, |kn, reff| {
+        p.coeff_roll_stiffness * kn * rmu * rmu * reff * reff
+    })
 }
 
 #[cfg(test)]

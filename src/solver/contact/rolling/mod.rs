@@ -7,7 +7,9 @@ pub mod epsd;
 pub mod epsd2;
 pub mod epsd3;
 
+use super::normal::NormalForce;
 use super::{ContactData, ForceData};
+use crate::solver::material::PairParams;
 use crate::solver::vec3::V3;
 
 /// Adds the rolling torque as every rolling header does: `i -= r_torque`, `j += r_torque`
@@ -84,4 +86,33 @@ pub fn spring(old: V3, wr_tot: V3, kr: f64, dt: f64, m_max: f64) -> (V3, bool) {
     } else {
         (m, false)
     }
+}
+
+/// The body shared by epsd and epsd3 (`calcRollTorque`), given the model's `k_r(kn, reff)`:
+/// `M = M_old + k_r dt wr_tot`, capped at `|Fn| reff mu_r`; the history stores `M`; below the
+/// cap the dashpot `C_r wr_tot`, `C_r = eta_r 2 sqrt(I_r k_r)`, is added but never stored.
+pub fn spring_dashpot(
+    cd: &ContactData,
+    nf: &NormalForce,
+    p: &PairParams,
+    hist: &mut V3,
+    update_history: bool,
+    kr: impl Fn(f64, f64) -> f64,
+) -> V3 {
+    let reff = reff(cd);
+    let r_inertia = rolling_inertia(cd, reff);
+    let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
+    let kr = kr(nf.kn, reff);
+    let m_max = nf.fn_.abs() * reff * p.coeff_roll_frict;
+    let (mut m, capped) = spring(*hist, wr_tot, kr, p.dt, m_max);
+    if update_history {
+        *hist = m;
+    }
+    if !capped {
+        let r_coef = p.coeff_roll_visc * 2.0 * (r_inertia * kr).sqrt();
+        for k in 0..3 {
+            m[k] += r_coef * wr_tot[k];
+        }
+    }
+    m
 }
