@@ -124,6 +124,10 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         timeout: 0,
         snapshot_every: 0,
         strict_stability: false,
+        flat_plates: false,
+        tooth_height: None,
+        tooth_wavelength: None,
+        particles: None,
     };
     let mut factors = a.dt_factors.clone();
     factors.sort_by(|x, y| y.total_cmp(x));

@@ -65,6 +65,18 @@ pub struct ShearArgs {
     /// Refuse to run (exit 2) when the explicit rolling dashpot is expected to be unstable.
     #[arg(long)]
     pub strict_stability: bool,
+    /// Flat plates instead of plates with teeth (flat plates let the gouge slip).
+    #[arg(long)]
+    pub flat_plates: bool,
+    /// Tooth height [m] of the plates (default 2e-4).
+    #[arg(long)]
+    pub tooth_height: Option<f64>,
+    /// Tooth wavelength [m] along x; box_x must hold a whole number of teeth (default 5e-4).
+    #[arg(long)]
+    pub tooth_wavelength: Option<f64>,
+    /// Particle count (the preset's box is scaled in x and z to keep the sample height).
+    #[arg(long)]
+    pub particles: Option<usize>,
     /// LIGGGHTS binary.
     #[arg(long)]
     pub liggghts: Option<PathBuf>,
@@ -98,6 +110,37 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
     }
     if a.snapshot_every > 0 {
         c.snapshot_every = a.snapshot_every;
+    }
+    if a.flat_plates {
+        c.plates = crate::spec::shear::Plates::Flat;
+    } else if let crate::spec::shear::Plates::Teeth {
+        tooth_height,
+        tooth_wavelength,
+    } = &mut c.plates
+    {
+        if let Some(h) = a.tooth_height {
+            *tooth_height = h;
+        }
+        if let Some(w) = a.tooth_wavelength {
+            *tooth_wavelength = w;
+        }
+    }
+    if let Some(n) = a.particles {
+        if n < 10 {
+            return Err(Error::invalid("--particles", n, ">= 10"));
+        }
+        // same area per particle (so the same height); box_x a whole number of teeth
+        let area = c.box_x * c.box_z * n as f64 / c.particles as f64;
+        let scale = (n as f64 / c.particles as f64).sqrt();
+        let w = match &c.plates {
+            crate::spec::shear::Plates::Teeth {
+                tooth_wavelength, ..
+            } => *tooth_wavelength,
+            crate::spec::shear::Plates::Flat => c.box_x / 8.0,
+        };
+        c.box_x = (c.box_x * scale / w).round().max(1.0) * w;
+        c.box_z = area / c.box_x;
+        c.particles = n;
     }
     let w = c.validate(a.allow_inertial)?;
     Ok((c, w))

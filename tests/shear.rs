@@ -136,7 +136,7 @@ fn native_only_resumes_and_writes_snapshots() {
 
 #[test]
 fn bad_shear_input_is_refused_with_reasons() {
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 6] = [
         (
             &["--rolling", "epsd2", "--mu-r", "0.5", "--eta-r", "0.5"],
             "eta_r acts only in epsd and epsd3",
@@ -147,6 +147,8 @@ fn bad_shear_input_is_refused_with_reasons() {
         ),
         (&["--speeds", "5.0"], "--allow-inertial"),
         (&["--mu-r", "nan"], "--mu-r"),
+        (&["--tooth-wavelength", "3e-4"], "whole number n of teeth"),
+        (&["--particles", "20"], "box_x/box_z"),
     ];
     for (extra, expect) in cases {
         let mut args = vec!["shear", "--native-only"];
