@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
-use crate::report::plot::{curves, line_plot, CurveData};
+use crate::report::plot::{line_plot, running_mean, Curve, CurveData};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_packing, CodeRun, Row};
@@ -230,6 +230,31 @@ pub fn shear_lockstep(
     dir: &Path,
     steps: u64,
 ) -> Result<(Horizon, Horizon)> {
+    let c = lockstep_case(case, steps);
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let (l, n) = std::thread::scope(|sc| {
+        let h = sc.spawn(|| run_liggghts(&c, compacted, lig, dir, &Progress::hidden()));
+        let n = run_native(&c, compacted, dir, &Progress::hidden());
+        (h.join().expect("LIGGGHTS thread"), n)
+    });
+    store(dir, "liggghts", &c, &l?)?;
+    store(dir, "native", &c, &n?)?;
+    let mut nudged = compacted.clone();
+    nudged.position[0][0] = f64::from_bits(nudged.position[0][0].to_bits() + 1);
+    let pdir = dir.join("perturbed");
+    store(
+        &pdir,
+        "native",
+        &c,
+        &run_native(&c, &nudged, &pdir, &Progress::hidden())?,
+    )?;
+    cached_lockstep(case, dir, steps)
+        .ok_or_else(|| Error::Reference(format!("lockstep results missing in {}", dir.display())))
+}
+
+/// The case of the lockstep from the compacted state: one servo step, then `steps` steps at the
+/// first stage's speed, output every 10 steps.
+fn lockstep_case(case: &ShearCase, steps: u64) -> ShearCase {
     let mut c = case.clone();
     c.compression_steps = 1;
     let speed = case.stages[0].speed;
@@ -239,27 +264,23 @@ pub fn shear_lockstep(
     }];
     c.output_every = 10;
     c.snapshot_every = 0;
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let (l, n) = std::thread::scope(|sc| {
-        let h = sc.spawn(|| run_liggghts(&c, compacted, lig, dir, &Progress::hidden()));
-        let n = run_native(&c, compacted, dir, &Progress::hidden());
-        (h.join().expect("LIGGGHTS thread"), n)
-    });
-    let ls = store(dir, "liggghts", &c, &l?)?;
-    let ns = store(dir, "native", &c, &n?)?;
-    let mut nudged = compacted.clone();
-    nudged.position[0][0] = f64::from_bits(nudged.position[0][0].to_bits() + 1);
-    let pdir = dir.join("perturbed");
-    let ps = store(
-        &pdir,
-        "native",
-        &c,
-        &run_native(&c, &nudged, &pdir, &Progress::hidden())?,
-    )?;
+    c
+}
+
+/// Horizons from stored lockstep results (LIGGGHTS vs native, native vs 1-ulp native).
+fn cached_lockstep(case: &ShearCase, dir: &Path, steps: u64) -> Option<(Horizon, Horizon)> {
+    let c = lockstep_case(case, steps);
+    let series =
+        |d: &Path, code: &str| cached(d, code, &c).map(|r| crate::shear::shear_series(&c, &r.rows));
+    let (l, n, p) = (
+        series(dir, "liggghts")?,
+        series(dir, "native")?,
+        series(&dir.join("perturbed"), "native")?,
+    );
     let chans = ["top_f", "bottom_f", "top_y"];
-    Ok((
-        lockstep(&ls, &ns, &chans, LOCKSTEP_RTOL),
-        lockstep(&ns, &ps, &chans, LOCKSTEP_RTOL),
+    Some((
+        lockstep(&l, &n, &chans, LOCKSTEP_RTOL),
+        lockstep(&n, &p, &chans, LOCKSTEP_RTOL),
     ))
 }
 
@@ -452,7 +473,14 @@ pub fn shear(a: ShearArgs) -> Result<Outcome> {
             )),
             _ => None,
         };
+        let ls_dir = dir.join("lockstep_shear");
         let shear_pair = match (&lig, nr.as_ref().and_then(|r| r.compacted.as_ref())) {
+            _ if ls.is_some()
+                && ns.is_some()
+                && cached_lockstep(case, &ls_dir, LOCKSTEP_SHEAR_STEPS).is_some() =>
+            {
+                cached_lockstep(case, &ls_dir, LOCKSTEP_SHEAR_STEPS)
+            }
             (Some(l), Some(state)) if ls.is_some() => Some(shear_lockstep(
                 case,
                 state,
@@ -667,10 +695,10 @@ fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
     };
     let mut data = Vec::new();
     for (k, s) in lig.iter().enumerate() {
-        data.push((format!("LIGGGHTS seed {}", k + 1), 0usize, s));
+        data.push((k, 0usize, s));
     }
     for (k, s) in nat.iter().enumerate() {
-        data.push((format!("native seed {}", k + 1), 1usize, s));
+        data.push((k, 1usize, s));
     }
     for (file, title, x, xd, y, yd) in [
         (
@@ -713,10 +741,36 @@ fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
                 if x == "strain[-]" {
                     p.retain(|q| q.0 > 0.0);
                 }
-                (l.clone(), *c, p)
+                (l.to_string(), *c, p)
             })
             .collect();
-        line_plot(&out.join(file), title, xd, yd, &curves(&pts))?;
+        // raw data faint, a running mean (+-10 outputs) per seed on top, one legend entry per code
+        let means: Vec<Vec<(f64, f64)>> = pts.iter().map(|(_, _, p)| running_mean(p, 10)).collect();
+        let mut cs: Vec<Curve> = pts
+            .iter()
+            .map(|(_, c, p)| Curve {
+                label: String::new(),
+                points: p,
+                color: *c,
+                faint: true,
+            })
+            .collect();
+        for ((seed, c, _), m) in pts.iter().zip(&means) {
+            cs.push(Curve {
+                label: if seed == "0" {
+                    format!(
+                        "{} (running mean, each seed)",
+                        if *c == 0 { "LIGGGHTS" } else { "native" }
+                    )
+                } else {
+                    String::new()
+                },
+                points: m,
+                color: *c,
+                faint: false,
+            });
+        }
+        line_plot(&out.join(file), title, xd, yd, &cs)?;
     }
     Ok(())
 }

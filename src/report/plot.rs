@@ -14,15 +14,29 @@ pub fn curves(data: &[CurveData]) -> Vec<Curve<'_>> {
             label: l.clone(),
             points: p,
             color: *c,
+            faint: false,
         })
         .collect()
 }
 
-/// One curve: label, points, colour index (0 LIGGGHTS blue, 1 native orange, 2.. others).
+/// One curve: label (empty: not in the legend), points, colour index (0 LIGGGHTS blue,
+/// 1 native orange, 2.. others), and whether it is drawn faint (raw data under a mean).
 pub struct Curve<'a> {
     pub label: String,
     pub points: &'a [(f64, f64)],
     pub color: usize,
+    pub faint: bool,
+}
+
+/// Centred running mean over `2 half + 1` points (fewer at the ends).
+pub fn running_mean(p: &[(f64, f64)], half: usize) -> Vec<(f64, f64)> {
+    (0..p.len())
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(half), (i + half + 1).min(p.len()));
+            let m = p[a..b].iter().map(|q| q.1).sum::<f64>() / (b - a) as f64;
+            (p[i].0, m)
+        })
+        .collect()
 }
 
 const PALETTE: [RGBColor; 6] = [
@@ -92,19 +106,24 @@ pub fn line_plot(
             .map_err(|e| err(e.to_string()))?;
         for c in curves {
             let color = PALETTE[c.color % PALETTE.len()];
-            chart
-                .draw_series(LineSeries::new(
-                    c.points
-                        .iter()
-                        .copied()
-                        .filter(|p| p.0.is_finite() && p.1.is_finite()),
-                    color.stroke_width(2),
-                ))
-                .map_err(|e| err(e.to_string()))?
-                .label(c.label.clone())
-                .legend(move |(x, y)| {
+            let style = if c.faint {
+                color.mix(0.25).stroke_width(1)
+            } else {
+                color.stroke_width(2)
+            };
+            let pts = c
+                .points
+                .iter()
+                .copied()
+                .filter(|p| p.0.is_finite() && p.1.is_finite());
+            let series = chart
+                .draw_series(LineSeries::new(pts, style))
+                .map_err(|e| err(e.to_string()))?;
+            if !c.label.is_empty() {
+                series.label(c.label.clone()).legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
                 });
+            }
         }
         chart
             .configure_series_labels()
@@ -139,16 +158,20 @@ mod tests {
                     label: "LIGGGHTS".into(),
                     points: &a,
                     color: 0,
+                    faint: false,
                 },
                 Curve {
-                    label: "native".into(),
+                    label: String::new(),
                     points: &b,
                     color: 1,
+                    faint: true,
                 },
             ],
         )
         .unwrap();
         let t = std::fs::read_to_string(&p).unwrap();
-        assert!(t.starts_with("<svg") && t.contains("LIGGGHTS") && t.contains("native"));
+        assert!(t.starts_with("<svg") && t.contains("LIGGGHTS") && !t.contains("native"));
+        let m = running_mean(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)], 1);
+        assert_eq!(m, vec![(0.0, 2.0), (1.0, 3.0), (2.0, 4.0)]);
     }
 }
