@@ -88,6 +88,13 @@ pub struct ShearArgs {
 /// The validated case of one seed.
 pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> {
     let rolling = RollingModel::parse(&a.rolling)?;
+    if rolling.native_only() && !a.native_only {
+        return Err(Error::invalid(
+            "--rolling",
+            rolling,
+            "a LIGGGHTS model when LIGGGHTS runs; epsd_implicit exists only in the native solver (use --native-only or --engine native)",
+        ));
+    }
     for (flag, v) in [("--mu-r", a.mu_r), ("--eta-r", a.eta_r)] {
         if !(v.is_finite() && v >= 0.0) {
             return Err(Error::invalid(flag, v, "a finite number >= 0"));

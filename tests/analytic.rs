@@ -79,7 +79,9 @@ impl RollingTheory {
             RollingModel::Epsd2 => kt * reff * reff,
             RollingModel::Epsd3 => case.material.rolling_stiffness * kn * mu_r * mu_r * reff * reff,
             RollingModel::Cdt => 0.0,
-            RollingModel::Off => unreachable!(),
+            RollingModel::Off | RollingModel::EpsdImplicit => {
+                unreachable!("not a contact-case model")
+            }
         };
         let rho = case.material.density;
         let (ia, ib) = (

@@ -44,15 +44,19 @@ pub enum RollingModel {
     Epsd,
     Epsd2,
     Epsd3,
+    /// Native only, not a LIGGGHTS model: epsd's spring with the rolling dashpot integrated
+    /// implicitly (trapezoidal) per particle, stable at any dt (`solver::shear` docs).
+    EpsdImplicit,
 }
 
 impl RollingModel {
-    pub const ALL: [RollingModel; 5] = [
+    pub const ALL: [RollingModel; 6] = [
         RollingModel::Off,
         RollingModel::Cdt,
         RollingModel::Epsd,
         RollingModel::Epsd2,
         RollingModel::Epsd3,
+        RollingModel::EpsdImplicit,
     ];
 
     /// The LIGGGHTS keyword (`off` for no rolling resistance).
@@ -63,6 +67,7 @@ impl RollingModel {
             RollingModel::Epsd => "epsd",
             RollingModel::Epsd2 => "epsd2",
             RollingModel::Epsd3 => "epsd3",
+            RollingModel::EpsdImplicit => "epsd_implicit",
         }
     }
 
@@ -82,13 +87,24 @@ impl RollingModel {
     pub fn has_history(self) -> bool {
         matches!(
             self,
-            RollingModel::Epsd | RollingModel::Epsd2 | RollingModel::Epsd3
+            RollingModel::Epsd
+                | RollingModel::Epsd2
+                | RollingModel::Epsd3
+                | RollingModel::EpsdImplicit
         )
     }
 
     /// Whether `coefficientRollingViscousDamping` (eta_r) acts in this model.
     pub fn has_damping(self) -> bool {
-        matches!(self, RollingModel::Epsd | RollingModel::Epsd3)
+        matches!(
+            self,
+            RollingModel::Epsd | RollingModel::Epsd3 | RollingModel::EpsdImplicit
+        )
+    }
+
+    /// Models of the native solver that LIGGGHTS does not have (never in a deck).
+    pub fn native_only(self) -> bool {
+        self == RollingModel::EpsdImplicit
     }
 }
 
@@ -320,6 +336,13 @@ impl CaseFile {
                 "material.rolling_stiffness",
                 m.rolling_stiffness,
                 ">= 1 (LIGGGHTS epsd3 in SI units)",
+            ));
+        }
+        if self.models.rolling.native_only() {
+            return Err(Error::invalid(
+                "models.rolling",
+                self.models.rolling,
+                "a LIGGGHTS model (contact cases compare with LIGGGHTS): off, cdt, epsd, epsd2, epsd3",
             ));
         }
         if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {

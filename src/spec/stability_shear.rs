@@ -62,7 +62,7 @@ pub struct StabilityReport {
 
 fn rolling_stiffness(model: RollingModel, kn: f64, kt: f64, mu_r: f64, k3: f64, reff: f64) -> f64 {
     match model {
-        RollingModel::Epsd => 2.25 * kn * mu_r * mu_r * reff * reff,
+        RollingModel::Epsd | RollingModel::EpsdImplicit => 2.25 * kn * mu_r * mu_r * reff * reff,
         RollingModel::Epsd3 => k3 * kn * mu_r * mu_r * reff * reff,
         RollingModel::Epsd2 => kt * reff * reff,
         RollingModel::Cdt | RollingModel::Off => 0.0,
@@ -116,7 +116,13 @@ pub fn stability(case: &ShearCase) -> StabilityReport {
         };
         let omega_r_dt = (kr / i_eff).sqrt() * dt;
         let lambda_dt = c_r * dt / i_eff;
-        let criterion = ROLLING_CONTACTS * (omega_r_dt * omega_r_dt + 2.0 * lambda_dt);
+        // epsd_implicit integrates the dashpot implicitly: only the spring limits dt
+        let explicit_lambda = if case.models.rolling == RollingModel::EpsdImplicit {
+            0.0
+        } else {
+            lambda_dt
+        };
+        let criterion = ROLLING_CONTACTS * (omega_r_dt * omega_r_dt + 2.0 * explicit_lambda);
         entries.push(StabilityEntry {
             contact: label,
             k_n: kn,

@@ -86,6 +86,10 @@ pub struct ContactOutcome {
     pub ft: V3,
     /// Rolling torque as LIGGGHTS computes it; i receives `-r_torque`, j `+r_torque`.
     pub r_torque: V3,
+    /// epsd_implicit: the dashpot coefficient C_r left to the integrator (0 when the spring
+    /// is at its limit); the dashpot torque on i is `-C_r P (w_i - w_j)`, P the projector
+    /// onto the tangent plane (identity with torsionTorque).
+    pub implicit_damping: f64,
 }
 
 /// Evaluates one touching contact: `ContactModel::surfacesIntersect` for
@@ -111,6 +115,7 @@ pub fn surfaces_intersect(
         &mut fi,
         &mut fj,
     );
+    let mut implicit_damping = 0.0;
     let r_torque = match p.rolling {
         RollingModel::Off => [0.0; 3],
         RollingModel::Cdt => rolling::cdt::torque(cd, &nf, p),
@@ -120,6 +125,11 @@ pub fn surfaces_intersect(
         }
         RollingModel::Epsd3 => {
             rolling::epsd3::torque(cd, &nf, p, &mut hist.r_torque, update_history)
+        }
+        RollingModel::EpsdImplicit => {
+            let (m, c) = rolling::epsd::spring_only(cd, &nf, p, &mut hist.r_torque, update_history);
+            implicit_damping = c;
+            m
         }
     };
     if p.rolling != RollingModel::Off {
@@ -132,6 +142,7 @@ pub fn surfaces_intersect(
             normal: nf,
             ft,
             r_torque,
+            implicit_damping,
         },
     )
 }

@@ -89,6 +89,12 @@ pub struct ShearSim {
     nl: NeighborList,
     xhold: Vec<[f64; 3]>,
     pair_force: Vec<(ForceData, ForceData)>,
+    /// epsd_implicit: per pair the dashpot coefficient and contact normal.
+    pair_damp: Vec<(f64, V3)>,
+    /// epsd_implicit: per particle `A = sum C P` (symmetric: xx yy zz xy xz yz) and
+    /// `B = sum C P w_j` of its rolling dashpots, for the implicit final half-kick.
+    imp: Vec<([f64; 6], V3)>,
+    implicit: bool,
     wall: Vec<WallSlots>,
     /// Per particle: its plate-force contributions (bottom, top).
     wall_force: Vec<([f64; 3], [f64; 3])>,
@@ -152,6 +158,9 @@ impl ShearSim {
             nl: NeighborList::default(),
             xhold: packing.position.clone(),
             pair_force: Vec::new(),
+            pair_damp: Vec::new(),
+            imp: vec![([0.0; 6], [0.0; 3]); n],
+            implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
             wall: vec![WallSlots::default(); n],
             wall_force: vec![([0.0; 3], [0.0; 3]); n],
             wall_start: vec![0; n + 1],
@@ -306,6 +315,9 @@ impl ShearSim {
             .zip(self.f.par_iter().zip(self.torque.par_iter()))
             .enumerate()
             .for_each(|(i, (((_, v), w), (f, t)))| nve.finish(v, w, *f, *t, radius[i], mass[i]));
+        if self.implicit {
+            self.implicit_rotation();
+        }
         self.servo.final_integrate(self.top_force);
         Ok(())
     }
@@ -346,6 +358,7 @@ impl ShearSim {
         self.top_hold = self.top.base_y;
         self.pair_force
             .resize(self.nl.pairs.len(), Default::default());
+        self.pair_damp.resize(self.nl.pairs.len(), (0.0, [0.0; 3]));
     }
 
     /// Per particle, the (mesh, triangle, image) within reach until the next rebuild: the
@@ -396,8 +409,12 @@ impl ShearSim {
         self.nl
             .pairs
             .par_iter_mut()
-            .zip(self.pair_force.par_iter_mut())
-            .for_each(|(p, out)| {
+            .zip(
+                self.pair_force
+                    .par_iter_mut()
+                    .zip(self.pair_damp.par_iter_mut()),
+            )
+            .for_each(|(p, (out, damp))| {
                 let (i, j) = (p.i as usize, p.j as usize);
                 let xj = [
                     x[j][0] + p.shift[0],
@@ -409,6 +426,7 @@ impl ShearSim {
                 let radsum = radius[i] + radius[j];
                 if rsq >= radsum * radsum {
                     *out = Default::default();
+                    *damp = (0.0, [0.0; 3]);
                     return;
                 }
                 let r = rsq.sqrt();
@@ -432,12 +450,16 @@ impl ShearSim {
                     omega_j: omega[j],
                     ..Default::default()
                 };
-                let (fi, fj, _) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
+                let (fi, fj, o) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
                 *out = (fi, fj);
+                *damp = (o.implicit_damping, cd.en);
             });
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
         let pf = &self.pair_force;
+        let pd = &self.pair_damp;
+        let implicit = self.implicit;
+        let torsion = params.torsion_torque;
         let meshes = &self.meshes;
         let (cand, cstart) = (&self.wall_cand, &self.wall_start);
         let (lx, lz) = (self.box_.lx, self.box_.lz);
@@ -448,11 +470,23 @@ impl ShearSim {
             .par_iter_mut()
             .zip(self.torque.par_iter_mut())
             .zip(self.wall.par_iter_mut())
-            .zip(self.wall_force.par_iter_mut())
+            .zip(self.wall_force.par_iter_mut().zip(self.imp.par_iter_mut()))
             .enumerate()
-            .for_each(|(q, (((f, t), slots), wf))| {
+            .for_each(|(q, (((f, t), slots), (wf, imp)))| {
                 *f = [0.0; 3];
                 *t = [0.0; 3];
+                *imp = ([0.0; 6], [0.0; 3]);
+                if implicit {
+                    for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
+                        let (c, n) = pd[k as usize];
+                        if c == 0.0 {
+                            continue;
+                        }
+                        let pr = &nl.pairs[k as usize];
+                        let other = if is_i { pr.j } else { pr.i } as usize;
+                        add_dashpot(imp, c, n, torsion, omega[other]);
+                    }
+                }
                 for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
                     let fd = if is_i {
                         &pf[k as usize].0
@@ -564,8 +598,18 @@ impl ShearSim {
                             );
                         }
                         let mut hist = slots.rec[slot].hist;
-                        let (fi, _, _) =
+                        let (fi, _, o) =
                             surfaces_intersect(&mut cd, params, &mut hist, update_history);
+                        if implicit && o.implicit_damping != 0.0 {
+                            // walls do not rotate; the dashpot acts on wr = cr omega_i / r
+                            add_dashpot(
+                                imp,
+                                o.implicit_damping * cd.cri * cd.rinv,
+                                cd.en,
+                                torsion,
+                                [0.0; 3],
+                            );
+                        }
                         slots.rec[slot].hist = hist;
                         let before = *f;
                         for c in 0..3 {
@@ -614,6 +658,36 @@ impl ShearSim {
         Ok(())
     }
 
+    /// epsd_implicit, after the explicit half-kick of the non-dashpot torques: solves the
+    /// dashpot implicitly, `(I/h + A) w = (I/h) w* + B` with `w*` the kicked angular velocity
+    /// and `h = dt/2`; neighbours' angular velocities enter at their values during the force
+    /// computation (Jacobi), so the result does not depend on thread count. The dashpot
+    /// torque `B - A w` is added to the stored torque for the next initial half-kick: the
+    /// damping is integrated by the trapezoidal rule, A-stable for any `C_r dt / I`.
+    fn implicit_rotation(&mut self) {
+        let h = self.nve.dtf;
+        let (radius, mass) = (&self.radius, &self.mass);
+        self.omega
+            .par_iter_mut()
+            .zip(self.torque.par_iter_mut())
+            .zip(self.imp.par_iter())
+            .enumerate()
+            .for_each(|(i, ((w, t), (a, b)))| {
+                if a.iter().all(|x| *x == 0.0) {
+                    return;
+                }
+                let ih = 0.4 * mass[i] * radius[i] * radius[i] / h;
+                let m = [a[0] + ih, a[1] + ih, a[2] + ih, a[3], a[4], a[5]];
+                let rhs = [ih * w[0] + b[0], ih * w[1] + b[1], ih * w[2] + b[2]];
+                let x = solve_sym3(m, rhs);
+                let ax = sym_mul(*a, x);
+                for k in 0..3 {
+                    t[k] += b[k] - ax[k];
+                }
+                *w = x;
+            });
+    }
+
     /// Checks the particle state for NaN (called at output steps).
     pub fn check_finite(&self) -> Result<()> {
         let bad = self
@@ -634,6 +708,55 @@ impl ShearSim {
     pub fn lost_particles(&self, y_lo: f64, y_hi: f64) -> usize {
         self.x.iter().filter(|x| x[1] < y_lo || x[1] > y_hi).count()
     }
+}
+
+/// Adds one implicit rolling dashpot `C P` (and `C P w_other`) to a particle's system.
+fn add_dashpot(imp: &mut ([f64; 6], V3), c: f64, n: V3, torsion: bool, w_other: V3) {
+    let p = if torsion {
+        [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]
+    } else {
+        [
+            1.0 - n[0] * n[0],
+            1.0 - n[1] * n[1],
+            1.0 - n[2] * n[2],
+            -n[0] * n[1],
+            -n[0] * n[2],
+            -n[1] * n[2],
+        ]
+    };
+    for k in 0..6 {
+        imp.0[k] += c * p[k];
+    }
+    let pw = sym_mul(p, w_other);
+    for k in 0..3 {
+        imp.1[k] += c * pw[k];
+    }
+}
+
+/// Symmetric 3x3 (xx yy zz xy xz yz) times a vector.
+fn sym_mul(a: [f64; 6], x: V3) -> V3 {
+    [
+        a[0] * x[0] + a[3] * x[1] + a[4] * x[2],
+        a[3] * x[0] + a[1] * x[1] + a[5] * x[2],
+        a[4] * x[0] + a[5] * x[1] + a[2] * x[2],
+    ]
+}
+
+/// Solves a symmetric positive definite 3x3 system by cofactors.
+fn solve_sym3(a: [f64; 6], b: V3) -> V3 {
+    let [xx, yy, zz, xy, xz, yz] = a;
+    let c00 = yy * zz - yz * yz;
+    let c01 = xz * yz - xy * zz;
+    let c02 = xy * yz - xz * yy;
+    let c11 = xx * zz - xz * xz;
+    let c12 = xy * xz - xx * yz;
+    let c22 = xx * yy - xy * xy;
+    let det = xx * c00 + xy * c01 + xz * c02;
+    [
+        (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det,
+        (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det,
+        (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det,
+    ]
 }
 
 #[cfg(test)]
@@ -662,6 +785,48 @@ mod tests {
             }
             (s.x.clone(), s.record())
         })
+    }
+
+    #[test]
+    fn symmetric_solve_inverts_sym_mul() {
+        let a = [4.0, 3.0, 5.0, 1.0, -0.5, 0.25];
+        let x = [0.3, -1.2, 2.0];
+        let b = sym_mul(a, x);
+        let y = solve_sym3(a, b);
+        for k in 0..3 {
+            assert!((x[k] - y[k]).abs() < 1e-14);
+        }
+        // a dashpot projects out the normal component
+        let mut imp = ([0.0; 6], [0.0; 3]);
+        add_dashpot(&mut imp, 2.0, [0.0, 1.0, 0.0], false, [1.0, 5.0, 0.0]);
+        assert_eq!(imp.0, [2.0, 0.0, 2.0, -0.0, -0.0, -0.0]);
+        assert_eq!(imp.1, [2.0, 0.0, 0.0]);
+    }
+
+    #[test]
+    fn implicit_dashpot_is_bit_identical_for_any_thread_count() {
+        let mut c = ShearCase::preset("ci", RollingModel::EpsdImplicit, 1.0, 0.5, 3).unwrap();
+        c.particles = 120;
+        let p = loose_packing(&c);
+        let run = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let mut s = ShearSim::new(&c, &p);
+                    s.setup(0.0).unwrap();
+                    for _ in 0..3000 {
+                        s.step().unwrap();
+                    }
+                    s.omega.clone()
+                })
+        };
+        let (a, b) = (run(1), run(3));
+        assert!(a.iter().any(|w| w[0] != 0.0));
+        for (x, y) in a.iter().zip(&b) {
+            assert_eq!(x.map(f64::to_bits), y.map(f64::to_bits));
+        }
     }
 
     #[test]

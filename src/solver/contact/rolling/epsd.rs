@@ -23,6 +23,33 @@ pub fn torque(
     })
 }
 
+/// epsd_implicit: epsd's spring (history, limit) without the dashpot, and the dashpot
+/// coefficient `C_r = eta_r 2 sqrt(I_r k_r)` (0 at the limit) for the implicit integrator.
+pub fn spring_only(
+    cd: &ContactData,
+    nf: &NormalForce,
+    p: &PairParams,
+    hist: &mut V3,
+    update_history: bool,
+) -> (V3, f64) {
+    let reff = super::reff(cd);
+    let r_inertia = super::rolling_inertia(cd, reff);
+    let wr_tot = super::tangential_part(super::relative_rotation(cd), cd.en, p.torsion_torque);
+    let rmu = p.coeff_roll_frict;
+    let kr = 2.25 * nf.kn * rmu * rmu * reff * reff;
+    let m_max = nf.fn_.abs() * reff * rmu;
+    let (m, capped) = super::spring(*hist, wr_tot, kr, p.dt, m_max);
+    if update_history {
+        *hist = m;
+    }
+    let c = if capped {
+        0.0
+    } else {
+        p.coeff_roll_visc * 2.0 * (r_inertia * kr).sqrt()
+    };
+    (m, c)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::super::normal::hertz;
