@@ -170,20 +170,10 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
     }
     let s = Series::read_csv(&dir.join(format!("{code}.csv"))).ok()?;
     let col = |h: &str| s.col(h);
-    let cols: Vec<usize> = [
-        "top_f_x[N]",
-        "top_f_y[N]",
-        "top_f_z[N]",
-        "bottom_f_x[N]",
-        "bottom_f_y[N]",
-        "bottom_f_z[N]",
-        "top_y[m]",
-        "ke[J]",
-        "erot[J]",
-    ]
-    .iter()
-    .map(|h| col(h))
-    .collect::<Option<_>>()?;
+    let cols: Vec<usize> = crate::shear::ROW_COLUMNS
+        .iter()
+        .map(|h| col(h))
+        .collect::<Option<_>>()?;
     let rows: Vec<Row> = s
         .steps
         .iter()

@@ -18,6 +18,19 @@ use std::time::Instant;
 /// translational and rotational kinetic energy.
 pub type Row = (u64, [f64; 9]);
 
+/// Series columns holding a [`Row`]'s values, in the row's order.
+pub const ROW_COLUMNS: [&str; 9] = [
+    "top_f_x[N]",
+    "top_f_y[N]",
+    "top_f_z[N]",
+    "bottom_f_x[N]",
+    "bottom_f_y[N]",
+    "bottom_f_z[N]",
+    "top_y[m]",
+    "ke[J]",
+    "erot[J]",
+];
+
 /// Result of one code's run.
 #[derive(Clone, Debug)]
 pub struct CodeRun {

@@ -275,27 +275,16 @@ impl<'a> Sim<'a> {
         if rsq >= radsum * radsum {
             return;
         }
-        let r = rsq.sqrt();
-        let rinv = 1.0 / r;
-        let (mi, mj) = (bi.mass, bj.mass);
-        let mut cd = ContactData {
-            is_wall: false,
-            radi: bi.radius,
-            radj: bj.radius,
-            radsum,
-            r,
-            rinv,
+        let mut cd = ContactData::pair(
             delta,
-            en: [delta[0] * rinv, delta[1] * rinv, delta[2] * rinv],
-            meff: mi * mj / (mi + mj),
-            mi,
-            mj,
-            v_i: bi.s.v,
-            v_j: bj.s.v,
-            omega_i: bi.s.omega,
-            omega_j: bj.s.omega,
-            ..Default::default()
-        };
+            rsq,
+            bi.radius,
+            bj.radius,
+            bi.mass,
+            bj.mass,
+            (bi.s.v, bj.s.v),
+            (bi.s.omega, bj.s.omega),
+        );
         let (fi, fj, _) = surfaces_intersect(&mut cd, &self.params, hist, update_history);
         self.pair_touching = true;
         add_force(&mut self.bodies[0].s, &fi);

@@ -63,6 +63,43 @@ pub struct ContactData {
     pub crj: f64,
 }
 
+impl ContactData {
+    /// A touching particle pair as pair_gran_base.h sets it up: `delta = x_i - x_j` (j's
+    /// image), `r = sqrt(rsq)`, `rinv = 1/r`, `en = delta * rinv`, `meff = mi mj / (mi + mj)`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn pair(
+        delta: V3,
+        rsq: f64,
+        radi: f64,
+        radj: f64,
+        mi: f64,
+        mj: f64,
+        v: (V3, V3),
+        omega: (V3, V3),
+    ) -> Self {
+        let r = rsq.sqrt();
+        let rinv = 1.0 / r;
+        ContactData {
+            is_wall: false,
+            radi,
+            radj,
+            radsum: radi + radj,
+            r,
+            rinv,
+            delta,
+            en: [delta[0] * rinv, delta[1] * rinv, delta[2] * rinv],
+            meff: mi * mj / (mi + mj),
+            mi,
+            mj,
+            v_i: v.0,
+            v_j: v.1,
+            omega_i: omega.0,
+            omega_j: omega.1,
+            ..Default::default()
+        }
+    }
+}
+
 /// Force and torque increments of one partner (LIGGGHTS `ForceData`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ForceData {

@@ -429,27 +429,16 @@ impl ShearSim {
                     *damp = (0.0, [0.0; 3]);
                     return;
                 }
-                let r = rsq.sqrt();
-                let rinv = 1.0 / r;
-                let (mi, mj) = (mass[i], mass[j]);
-                let mut cd = ContactData {
-                    is_wall: false,
-                    radi: radius[i],
-                    radj: radius[j],
-                    radsum,
-                    r,
-                    rinv,
+                let mut cd = ContactData::pair(
                     delta,
-                    en: [delta[0] * rinv, delta[1] * rinv, delta[2] * rinv],
-                    meff: mi * mj / (mi + mj),
-                    mi,
-                    mj,
-                    v_i: v[i],
-                    v_j: v[j],
-                    omega_i: omega[i],
-                    omega_j: omega[j],
-                    ..Default::default()
-                };
+                    rsq,
+                    radius[i],
+                    radius[j],
+                    mass[i],
+                    mass[j],
+                    (v[i], v[j]),
+                    (omega[i], omega[j]),
+                );
                 let (fi, fj, o) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
                 *out = (fi, fj);
                 *damp = (o.implicit_damping, cd.en);
