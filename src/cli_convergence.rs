@@ -321,9 +321,9 @@ fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
         ),
         (
             "erot_dt.svg",
-            "mean rotational kinetic energy against time step",
-            "E_rot [J]",
-            |p: &DtPoint| p.erot,
+            "mean rotational kinetic energy against time step (log scale)",
+            "log10 E_rot [J]",
+            |p: &DtPoint| p.erot.max(1e-300).log10(),
         ),
     ] {
         let data: Vec<CurveData> = ["liggghts", "native"]

@@ -48,6 +48,16 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
+/// Axis labels: scientific notation for very small or large magnitudes.
+fn tick(v: &f64) -> String {
+    let a = v.abs();
+    if a != 0.0 && !(1e-2..1e4).contains(&a) {
+        format!("{v:.2e}")
+    } else {
+        format!("{}", (v * 1e4).round() / 1e4)
+    }
+}
+
 /// Draws `curves` into an SVG file at `path`.
 pub fn line_plot(
     path: &Path,
@@ -102,6 +112,8 @@ pub fn line_plot(
             .configure_mesh()
             .x_desc(x_desc)
             .y_desc(y_desc)
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
             .draw()
             .map_err(|e| err(e.to_string()))?;
         for c in curves {
@@ -116,6 +128,17 @@ pub fn line_plot(
                 .iter()
                 .copied()
                 .filter(|p| p.0.is_finite() && p.1.is_finite());
+            if !c.faint && c.points.len() <= 50 {
+                // few points (e.g. one per time step): mark them
+                let marks = c
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| p.0.is_finite() && p.1.is_finite());
+                chart
+                    .draw_series(marks.map(|p| Circle::new(p, 4, color.filled())))
+                    .map_err(|e| err(e.to_string()))?;
+            }
             let series = chart
                 .draw_series(LineSeries::new(pts, style))
                 .map_err(|e| err(e.to_string()))?;
