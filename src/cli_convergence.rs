@@ -22,30 +22,15 @@ use std::time::Duration;
 
 #[derive(Args, Debug, Clone)]
 pub struct ConvergenceArgs {
-    #[arg(long, default_value_t = 0.0)]
-    pub mu_r: f64,
-    #[arg(long, default_value_t = 0.0)]
-    pub eta_r: f64,
-    #[arg(long, default_value = "epsd")]
-    pub rolling: String,
-    #[arg(long, default_value = "fast")]
-    pub preset: String,
+    /// The shear case: every `verify shear` option (preset, mu_r, eta_r, rolling, seeds, ...).
+    #[command(flatten)]
+    pub case: ShearArgs,
     /// Factors applied to the preset's dt, largest first.
     #[arg(long, value_delimiter = ',', default_value = "1,0.5,0.25")]
     pub dt_factors: Vec<f64>,
     /// native, liggghts or both.
     #[arg(long, default_value = "native")]
     pub engine: String,
-    #[arg(long, default_value_t = 3)]
-    pub seeds: u64,
-    #[arg(long)]
-    pub strain: Option<f64>,
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    #[arg(long)]
-    pub liggghts: Option<PathBuf>,
-    #[arg(long)]
-    pub allow_inertial: bool,
 }
 
 /// Figures of one (dt, code).
@@ -83,6 +68,13 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             "factors in (0, 1], e.g. 1,0.5,0.25",
         ));
     }
+    if a.case.native_only || a.case.liggghts_only {
+        return Err(Error::invalid(
+            "--native-only/--liggghts-only",
+            "given",
+            "--engine native|liggghts|both for verify convergence",
+        ));
+    }
     let (run_nat, run_lig) = match a.engine.as_str() {
         "native" => (true, false),
         "liggghts" => (false, true),
@@ -97,51 +89,33 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
     };
     let lig = if run_lig {
         Some(Liggghts::locate(
-            a.liggghts.as_deref(),
+            a.case.liggghts.as_deref(),
             Duration::from_secs(7 * 24 * 3600),
         )?)
     } else {
         None
     };
     let out = a
+        .case
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("runs").join(format!("convergence-{}", utc_stamp())));
-    let sargs = ShearArgs {
-        mu_r: a.mu_r,
-        eta_r: a.eta_r,
-        rolling: a.rolling.clone(),
-        preset: a.preset.clone(),
-        seeds: a.seeds,
-        speeds: None,
-        strain: a.strain,
-        threads: None,
-        out: None,
-        native_only: !run_lig,
-        liggghts_only: !run_nat,
-        allow_inertial: a.allow_inertial,
-        liggghts: None,
-        timeout: 0,
-        snapshot_every: 0,
-        strict_stability: false,
-        flat_plates: false,
-        tooth_height: None,
-        tooth_wavelength: None,
-        particles: None,
-    };
+    let mut sargs = a.case.clone();
+    sargs.native_only = !run_lig;
+    sargs.liggghts_only = !run_nat;
     let mut factors = a.dt_factors.clone();
     factors.sort_by(|x, y| y.total_cmp(x));
     println!(
         "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
-        a.preset,
+        a.case.preset,
         a.engine,
-        a.seeds,
+        a.case.seeds,
         out.display()
     );
     // per seed: the compacted state at the preset's dt (native), shared by every dt and code
     let mut per: Vec<(String, f64, Vec<Series>)> = Vec::new();
     let mut stab = Vec::new();
-    for seed in 1..=a.seeds {
+    for seed in 1..=a.case.seeds {
         let (case, _) = shear_case(&sargs, seed)?;
         let loose = loose_packing(&case);
         let mut sim = ShearSim::new(&case, &loose);
