@@ -229,21 +229,13 @@ pub fn run_liggghts(
 /// `strain` = bottom plate displacement / current height; `height` = distance between the
 /// plates' mean surfaces.
 pub fn shear_series(case: &ShearCase, rows: &[Row]) -> Series {
-    let columns = [
-        "time[s]",
-        "strain[-]",
-        "top_f_x[N]",
-        "top_f_y[N]",
-        "top_f_z[N]",
-        "bottom_f_x[N]",
-        "bottom_f_y[N]",
-        "bottom_f_z[N]",
-        "top_y[m]",
-        "height[m]",
-        "mu[-]",
-        "ke[J]",
-        "erot[J]",
-    ];
+    let (forces, energies) = ROW_COLUMNS.split_at(7);
+    let columns: Vec<&str> = ["time[s]", "strain[-]"]
+        .into_iter()
+        .chain(forces.iter().copied())
+        .chain(["height[m]", "mu[-]"])
+        .chain(energies.iter().copied())
+        .collect();
     let t = case.plates.tooth_height();
     let mut s = Series {
         columns: columns.iter().map(|c| c.to_string()).collect(),

@@ -2,15 +2,9 @@
 
 mod common;
 
+use common::verify;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn verify(args: &[&str]) -> Output {
-    Command::new(common::verify_bin())
-        .args(args)
-        .output()
-        .expect("run verify")
-}
+use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -3,15 +3,9 @@
 
 mod common;
 
+use common::verify;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn verify(args: &[&str]) -> Output {
-    Command::new(common::verify_bin())
-        .args(args)
-        .output()
-        .expect("run verify")
-}
+use std::process::Output;
 
 fn text(o: &Output) -> String {
     format!(

@@ -566,14 +566,14 @@ fn finite3(field: &str, v: [f64; 3]) -> Result<()> {
         ))
     }
 }
-fn positive(field: &str, v: f64) -> Result<()> {
+pub(crate) fn positive(field: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
         Err(Error::invalid(field, v, "a finite number > 0"))
     }
 }
-fn non_negative(field: &str, v: f64) -> Result<()> {
+pub(crate) fn non_negative(field: &str, v: f64) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {

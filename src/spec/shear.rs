@@ -2,7 +2,7 @@
 //! bottom plate sheared in x and a top plate servo-controlled to a normal stress (free in y).
 //! Presets `paper`, `fast` and `ci`; every value validated before either code sees it.
 
-use super::{check_identifier, Material, Models, RollingModel};
+use super::{check_identifier, non_negative, positive, Material, Models, RollingModel};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -312,7 +312,7 @@ impl ShearCase {
             ));
         }
         for (k, r) in self.radii.iter().enumerate() {
-            pos(&format!("radii[{k}]"), *r)?;
+            positive(&format!("radii[{k}]"), *r)?;
         }
         for (k, p) in self.percentages.iter().enumerate() {
             if !(p.is_finite() && *p >= 0.0) {
@@ -327,8 +327,8 @@ impl ShearCase {
         if (sum - 100.0).abs() > 1e-6 {
             return Err(Error::invalid("percentages", sum, "values summing to 100"));
         }
-        pos("box_x", self.box_x)?;
-        pos("box_z", self.box_z)?;
+        positive("box_x", self.box_x)?;
+        positive("box_z", self.box_z)?;
         let rmax = self.radii.iter().cloned().fold(0.0, f64::max);
         let rmin = self.radii.iter().cloned().fold(f64::INFINITY, f64::min);
         let cut = 2.0 * rmax + self.skin;
@@ -344,8 +344,8 @@ impl ShearCase {
             tooth_wavelength,
         } = &self.plates
         {
-            pos("plates.tooth_height", *tooth_height)?;
-            pos("plates.tooth_wavelength", *tooth_wavelength)?;
+            positive("plates.tooth_height", *tooth_height)?;
+            positive("plates.tooth_wavelength", *tooth_wavelength)?;
             let n = self.box_x / tooth_wavelength;
             if (n - n.round()).abs() > 1e-9 || n.round() < 1.0 {
                 return Err(Error::invalid(
@@ -359,7 +359,7 @@ impl ShearCase {
             }
         }
         let m = &self.material;
-        pos("material.youngs_modulus", m.youngs_modulus)?;
+        positive("material.youngs_modulus", m.youngs_modulus)?;
         if !(0.0..0.5).contains(&m.poisson_ratio) {
             return Err(Error::invalid(
                 "material.poisson_ratio",
@@ -367,7 +367,7 @@ impl ShearCase {
                 "0 <= nu < 0.5",
             ));
         }
-        pos("material.density", m.density)?;
+        positive("material.density", m.density)?;
         if !(m.restitution > 0.05 && m.restitution <= 1.0) {
             return Err(Error::invalid(
                 "material.restitution",
@@ -375,9 +375,9 @@ impl ShearCase {
                 "0.05 < e <= 1 (LIGGGHTS' range)",
             ));
         }
-        nonneg("material.friction", m.friction)?;
-        nonneg("material.rolling_friction (--mu-r)", m.rolling_friction)?;
-        nonneg("material.rolling_damping (--eta-r)", m.rolling_damping)?;
+        non_negative("material.friction", m.friction)?;
+        non_negative("material.rolling_friction (--mu-r)", m.rolling_friction)?;
+        non_negative("material.rolling_damping (--eta-r)", m.rolling_damping)?;
         if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {
             return Err(Error::invalid(
                 "material.rolling_damping (--eta-r)",
@@ -395,7 +395,7 @@ impl ShearCase {
                 ">= 1",
             ));
         }
-        pos("dt", self.dt)?;
+        positive("dt", self.dt)?;
         let t_r = super::rayleigh_time(m, rmin);
         if self.dt > t_r {
             return Err(Error::invalid(
@@ -412,9 +412,9 @@ impl ShearCase {
                 t_r
             ));
         }
-        pos("normal_stress", self.normal_stress)?;
-        pos("servo.vel_max", self.servo.vel_max)?;
-        pos("skin", self.skin)?;
+        positive("normal_stress", self.normal_stress)?;
+        positive("servo.vel_max", self.servo.vel_max)?;
+        positive("skin", self.skin)?;
         if self.skin > rmin {
             return Err(Error::invalid(
                 "skin",
@@ -437,7 +437,7 @@ impl ShearCase {
             ("servo.ki", self.servo.ki),
             ("servo.kd", self.servo.kd),
         ] {
-            nonneg(f, v)?;
+            non_negative(f, v)?;
         }
         if self.servo.kp + self.servo.ki + self.servo.kd == 0.0 {
             return Err(Error::invalid("servo.kp", 0, "kp, ki, kd not all zero"));
@@ -449,8 +449,8 @@ impl ShearCase {
             return Err(Error::invalid("stages", "[]", "at least one shear stage"));
         }
         for (k, s) in self.stages.iter().enumerate() {
-            pos(&format!("stages[{k}].speed"), s.speed)?;
-            pos(&format!("stages[{k}].strain"), s.strain)?;
+            positive(&format!("stages[{k}].speed"), s.speed)?;
+            positive(&format!("stages[{k}].strain"), s.strain)?;
         }
         if self.output_every == 0 {
             return Err(Error::invalid("output_every", 0, ">= 1"));
@@ -473,22 +473,6 @@ impl ShearCase {
             ));
         }
         Ok(warnings)
-    }
-}
-
-fn pos(field: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(field, v, "a finite number > 0"))
-    }
-}
-
-fn nonneg(field: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(field, v, "a finite number >= 0"))
     }
 }
 

@@ -17,3 +17,11 @@ pub fn liggghts() -> Liggghts {
 pub fn verify_bin() -> &'static str {
     env!("CARGO_BIN_EXE_verify")
 }
+
+/// Runs the `verify` binary with `args`.
+pub fn verify(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(verify_bin())
+        .args(args)
+        .output()
+        .expect("run verify")
+}
