@@ -33,7 +33,8 @@ pub enum Outcome {
         verify contact --spec my_case.toml --rolling epsd2\n  \
         verify contact --list\n  \
         verify decks                                   # regenerate liggghts_inputs/\n  \
-        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n\n\
+        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n  \
+        verify nightly --out runs/nightly/today          # everything, report.html\n\n\
         Exit status: 0 agree, 1 disagree, 2 error."
 )]
 pub struct Cli {
@@ -49,6 +50,9 @@ pub enum Command {
     Shear(crate::cli_shear::ShearArgs),
     /// Time-step convergence: the same case from the same compacted state at smaller dt.
     Convergence(crate::cli_convergence::ConvergenceArgs),
+    /// Every contact case and the nightly shear cases in both codes: report.html, summary.json,
+    /// history.
+    Nightly(crate::cli_nightly::NightlyArgs),
     /// Throughput of both codes on the same dense shear state (particle-steps per second).
     Bench(crate::bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
@@ -101,6 +105,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Contact(a) => contact(a),
         Command::Shear(a) => crate::cli_shear::shear(a),
         Command::Bench(a) => crate::bench::bench(a),
+        Command::Nightly(a) => crate::cli_nightly::nightly(a),
         Command::Convergence(a) => crate::cli_convergence::convergence(a),
         Command::Decks { out } => {
             let n = write_decks(&out)?;
@@ -288,6 +293,13 @@ pub fn contact_one(
         native = native.at_steps(&lig_series.steps)?;
     }
     native.write_csv(&dir.join("native.csv"))?;
+    crate::report::contact::contact_plots(
+        &dir,
+        &name,
+        &lig_series,
+        &native,
+        case.models.rolling != RollingModel::Off,
+    )?;
     compare(
         &case.name,
         case.models.rolling.keyword(),

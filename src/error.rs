@@ -54,6 +54,9 @@ pub enum Error {
     },
     #[error("CSV error on {path}: {msg}")]
     Csv { path: PathBuf, msg: String },
+    /// A run of several cases in which some could not be run (each named in the message).
+    #[error("{0}")]
+    Cases(String),
     #[error("JSON error: {0}")]
     Json(#[from] serde_json::Error),
 }

@@ -10,6 +10,7 @@
 pub mod bench;
 pub mod cli;
 pub mod cli_convergence;
+pub mod cli_nightly;
 pub mod cli_shear;
 pub mod compare;
 pub mod deck;

@@ -1,5 +1,9 @@
 //! Verdicts to people: terminal tables, `summary.json`, SVG plots, VTK snapshots, progress.
 
+pub mod bars;
+pub mod contact;
+pub mod history;
+pub mod html;
 pub mod plot;
 pub mod progress;
 pub mod vtk;

@@ -9,23 +9,49 @@ pub type CurveData = (String, usize, Vec<(f64, f64)>);
 
 /// Borrows owned curve data as [`Curve`]s.
 pub fn curves(data: &[CurveData]) -> Vec<Curve<'_>> {
-    data.iter()
-        .map(|(l, c, p)| Curve {
-            label: l.clone(),
-            points: p,
-            color: *c,
-            faint: false,
-        })
-        .collect()
+    data.iter().map(|(l, c, p)| Curve::new(l, p, *c)).collect()
 }
 
 /// One curve: label (empty: not in the legend), points, colour index (0 LIGGGHTS blue,
-/// 1 native orange, 2.. others), and whether it is drawn faint (raw data under a mean).
+/// 1 native orange, 2.. others), whether it is drawn faint (raw data under a mean) and whether
+/// dashed (a curve drawn over an identical one stays visible).
 pub struct Curve<'a> {
     pub label: String,
     pub points: &'a [(f64, f64)],
     pub color: usize,
     pub faint: bool,
+    pub dashed: bool,
+}
+
+impl<'a> Curve<'a> {
+    /// A solid curve.
+    pub fn new(label: &str, points: &'a [(f64, f64)], color: usize) -> Self {
+        Curve {
+            label: label.to_string(),
+            points,
+            color,
+            faint: false,
+            dashed: false,
+        }
+    }
+    /// Drawn faint (thin, transparent).
+    pub fn faint(mut self) -> Self {
+        self.faint = true;
+        self
+    }
+    /// Drawn dashed.
+    pub fn dashed(mut self) -> Self {
+        self.dashed = true;
+        self
+    }
+}
+
+/// At most `n` points of `p`, evenly strided (first and last kept): keeps SVGs small.
+pub fn decimate(p: &[(f64, f64)], n: usize) -> Vec<(f64, f64)> {
+    if p.len() <= n || n < 2 {
+        return p.to_vec();
+    }
+    (0..n).map(|k| p[k * (p.len() - 1) / (n - 1)]).collect()
 }
 
 /// Centred running mean over `2 half + 1` points (fewer at the ends).
@@ -139,9 +165,12 @@ pub fn line_plot(
                     .draw_series(marks.map(|p| Circle::new(p, 4, color.filled())))
                     .map_err(|e| err(e.to_string()))?;
             }
-            let series = chart
-                .draw_series(LineSeries::new(pts, style))
-                .map_err(|e| err(e.to_string()))?;
+            let series = if c.dashed {
+                chart.draw_series(DashedLineSeries::new(pts, 8, 6, style))
+            } else {
+                chart.draw_series(LineSeries::new(pts, style))
+            }
+            .map_err(|e| err(e.to_string()))?;
             if !c.label.is_empty() {
                 series.label(c.label.clone()).legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
@@ -177,18 +206,8 @@ mod tests {
             "strain",
             "mu",
             &[
-                Curve {
-                    label: "LIGGGHTS".into(),
-                    points: &a,
-                    color: 0,
-                    faint: false,
-                },
-                Curve {
-                    label: String::new(),
-                    points: &b,
-                    color: 1,
-                    faint: true,
-                },
+                Curve::new("LIGGGHTS", &a, 0),
+                Curve::new("", &b, 1).dashed().faint(),
             ],
         )
         .unwrap();
@@ -196,5 +215,7 @@ mod tests {
         assert!(t.starts_with("<svg") && t.contains("LIGGGHTS") && !t.contains("native"));
         let m = running_mean(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)], 1);
         assert_eq!(m, vec![(0.0, 2.0), (1.0, 3.0), (2.0, 4.0)]);
+        let d = decimate(&a, 5);
+        assert_eq!((d.len(), d[0], d[4]), (5, a[0], a[49]));
     }
 }
