@@ -174,7 +174,7 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         let st = steady(series, window, c.box_x * c.box_z);
         let erots: Vec<f64> = series
             .iter()
-            .map(|s| window_mean(s, "erot[J]", window))
+            .map(|s| s.window_mean("erot[J]", window))
             .collect();
         let (erot, erot_ci95) = mean_ci95(&erots);
         let k = factors.iter().position(|x| x == f).unwrap_or(0);
@@ -271,18 +271,6 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
     } else {
         Outcome::Disagree
     })
-}
-
-fn window_mean(s: &Series, col: &str, w: (u64, u64)) -> f64 {
-    let c = s.col(col).expect("column");
-    let v: Vec<f64> = s
-        .steps
-        .iter()
-        .zip(&s.rows)
-        .filter(|(st, _)| **st > w.0 && **st <= w.1)
-        .map(|(_, r)| r[c])
-        .collect();
-    v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {

@@ -449,8 +449,8 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<
                 .join(format!("seed{}", r.seed))
                 .join(format!("{code}.csv"));
             let series = Series::read_csv(&csv)?;
-            erot += window_mean(&series, "erot[J]", s.steady_window_steps);
-            ke += window_mean(&series, "ke[J]", s.steady_window_steps);
+            erot += series.window_mean("erot[J]", s.steady_window_steps);
+            ke += series.window_mean("ke[J]", s.steady_window_steps);
         }
         let n = s.seeds.len().max(1) as f64;
         let (wall, thr): (Vec<f64>, Vec<f64>) = s
@@ -478,19 +478,6 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<
         }
     }
     Ok(())
-}
-
-/// Mean of column `col` over the rows in the window (start exclusive, end inclusive).
-pub fn window_mean(s: &Series, col: &str, w: (u64, u64)) -> f64 {
-    let Some(c) = s.col(col) else { return f64::NAN };
-    let v: Vec<f64> = s
-        .steps
-        .iter()
-        .zip(&s.rows)
-        .filter(|(st, _)| **st > w.0 && **st <= w.1)
-        .map(|(_, r)| r[c])
-        .collect();
-    v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 /// The night's history records, one per case.
@@ -555,7 +542,9 @@ fn num(v: Option<f64>, prec: usize) -> String {
 }
 
 fn sci(v: f64) -> String {
-    if v.is_finite() {
+    if v == 0.0 {
+        "0 (bit for bit)".into()
+    } else if v.is_finite() {
         format!("{v:.3e}")
     } else {
         format!("{v}")

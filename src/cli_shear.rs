@@ -38,6 +38,12 @@ pub struct ShearArgs {
     /// Number of seeds (initial packings).
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
+    /// First seed: runs seeds first-seed ..= first-seed + seeds - 1.
+    #[arg(long, default_value_t = 1)]
+    pub first_seed: u64,
+    /// No progress bars (callers with a progress display of their own, e.g. a sweep).
+    #[arg(skip)]
+    pub hide_progress: bool,
     /// Shear speeds [m/s], comma separated (replaces the preset's stages).
     #[arg(long, value_delimiter = ',')]
     pub speeds: Option<Vec<f64>>,
@@ -370,7 +376,10 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
     if a.seeds == 0 || a.seeds > 1000 {
         return Err(Error::invalid("--seeds", a.seeds, "1 ..= 1000"));
     }
-    let cases: Vec<(ShearCase, Vec<String>)> = (1..=a.seeds)
+    if a.first_seed == 0 || a.first_seed > u64::MAX / 2 {
+        return Err(Error::invalid("--first-seed", a.first_seed, ">= 1"));
+    }
+    let cases: Vec<(ShearCase, Vec<String>)> = (a.first_seed..a.first_seed + a.seeds)
         .map(|s| shear_case(a, s))
         .collect::<Result<_>>()?;
     let case0 = &cases[0].0;
@@ -467,8 +476,11 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
                     Some(sc.spawn(move || Ok(c)))
                 }
                 (Some(l), _) => {
-                    let p =
-                        Progress::new(&multi, &format!("LIGGGHTS s{}", case.seed), total, case.dt);
+                    let p = if a.hide_progress {
+                        Progress::hidden()
+                    } else {
+                        Progress::new(&multi, &format!("LIGGGHTS s{}", case.seed), total, case.dt)
+                    };
                     let (packing, dir) = (&packing, &dir);
                     Some(sc.spawn(move || run_liggghts(case, packing, l, dir, &p)))
                 }
@@ -481,12 +493,11 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
                         Ok(c)
                     }
                     None => {
-                        let p = Progress::new(
-                            &multi,
-                            &format!("native s{}", case.seed),
-                            total,
-                            case.dt,
-                        );
+                        let p = if a.hide_progress {
+                            Progress::hidden()
+                        } else {
+                            Progress::new(&multi, &format!("native s{}", case.seed), total, case.dt)
+                        };
                         pool.install(|| run_native(case, &packing, &dir, &p))
                     }
                 })

@@ -1,0 +1,206 @@
+//! `verify nightly --quick` end to end against live LIGGGHTS, and its report checked in a real
+//! browser (Debian's chromium, headless): it loads without script or console errors, every plot
+//! is present with a size and content, and a screenshot is kept in
+//! target/tmp/nightly-test/report.png.
+
+mod common;
+
+use common::verify;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// Debian's chromium; the test fails (never skips) without it.
+fn chromium() -> PathBuf {
+    for c in ["chromium", "chromium-browser", "google-chrome"] {
+        if let Ok(o) = Command::new("sh")
+            .args(["-c", &format!("command -v {c}")])
+            .output()
+        {
+            let p = String::from_utf8_lossy(&o.stdout).trim().to_string();
+            if o.status.success() && !p.is_empty() {
+                return PathBuf::from(p);
+            }
+        }
+    }
+    panic!("this test renders the report in headless Chromium and none is installed: apt-get install -y chromium");
+}
+
+/// Runs headless Chromium on `page` with `extra` arguments (fresh profile, no network services).
+fn browse(profile: &Path, page: &Path, extra: &[&str]) -> Output {
+    let url = format!("file://{}", page.canonicalize().unwrap().display());
+    Command::new(chromium())
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--enable-logging=stderr",
+            "--v=0",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(url)
+        .output()
+        .expect("run chromium")
+}
+
+fn body_attr(dom: &str, name: &str) -> Option<usize> {
+    let key = format!("{name}=\"");
+    let start = dom.find(&key)? + key.len();
+    dom[start..].split('"').next()?.parse().ok()
+}
+
+#[test]
+fn quick_night_agrees_and_its_report_renders_in_chromium() {
+    common::liggghts();
+    let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("nightly-test");
+    let _ = std::fs::remove_dir_all(&root);
+    let out = root.join("night");
+    let history = root.join("history.jsonl");
+    let o = verify(&[
+        "nightly",
+        "--quick",
+        "--out",
+        out.to_str().unwrap(),
+        "--history",
+        history.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["pass"], true);
+    assert_eq!(s["quick"], true);
+    let contact = s["contact"].as_array().unwrap();
+    assert_eq!(contact.len(), 23, "every built-in case x applicable model");
+    for c in contact {
+        assert!(c["max_rel_err"].as_f64().unwrap() <= 1e-9, "{c}");
+    }
+    let shear = s["shear"].as_array().unwrap();
+    assert_eq!(shear.len(), 5);
+    for r in shear {
+        for code in ["liggghts", "native"] {
+            let mu = r[code]["mu"].as_f64().unwrap();
+            assert!((0.1..0.9).contains(&mu), "{} {code}: mu {mu}", r["name"]);
+            let stress = r[code]["normal_stress"].as_f64().unwrap();
+            assert!((stress / 1e7 - 1.0).abs() < 0.03, "{stress}");
+            assert!(r[code]["erot"].as_f64().unwrap() > 0.0);
+        }
+        assert!(r["lockstep_steps"].as_u64().unwrap() > 10, "{r}");
+    }
+    // the paper's point with the unstable explicit dashpot is flagged
+    let unstable: Vec<&str> = shear
+        .iter()
+        .filter(|r| r["dashpot_stable"] == false)
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert!(
+        unstable.contains(&"ci/epsd mu_r=1 eta_r=0.5"),
+        "{unstable:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&history).unwrap().lines().count(),
+        28,
+        "one history line per case"
+    );
+
+    // the report in a real browser
+    let report = out.join("report.html");
+    let html = std::fs::read_to_string(&report).unwrap();
+    assert!(
+        !html.contains("src=\"http") && !html.contains("href=\"http"),
+        "self-contained: no network resources"
+    );
+    let expected = body_attr(&html, "data-plots-expected").unwrap();
+    // 1 bar chart + 2 trend plots + 4 per shear case + 2 per contact run
+    assert_eq!(expected, 1 + 2 + 5 * 4 + 23 * 2);
+    let dom = browse(&root.join("profile-dom"), &report, &["--dump-dom"]);
+    assert!(dom.status.success(), "{}", text(&dom));
+    let dom_text = String::from_utf8_lossy(&dom.stdout);
+    assert_eq!(
+        body_attr(&dom_text, "data-script-errors"),
+        Some(0),
+        "script errors"
+    );
+    assert_eq!(body_attr(&dom_text, "data-plots-found"), Some(expected));
+    assert_eq!(
+        body_attr(&dom_text, "data-plots-ok"),
+        Some(expected),
+        "every plot rendered with a size and content"
+    );
+    let stderr = String::from_utf8_lossy(&dom.stderr);
+    let console: Vec<&str> = stderr.lines().filter(|l| l.contains("CONSOLE")).collect();
+    assert!(console.is_empty(), "console messages: {console:?}");
+    let shot = root.join("report.png");
+    let o = browse(
+        &root.join("profile-shot"),
+        &report,
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1400,2400",
+            "--hide-scrollbars",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let png = std::fs::read(&shot).unwrap();
+    assert!(
+        png.starts_with(b"\x89PNG") && png.len() > 50_000,
+        "{} bytes",
+        png.len()
+    );
+    println!("screenshot of the report: {}", shot.display());
+}
+
+#[test]
+fn nightly_refuses_a_corrupt_history_before_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let history = dir.path().join("history.jsonl");
+    std::fs::write(&history, "{\"night\": 1\n").unwrap();
+    let o = verify(&[
+        "nightly",
+        "--quick",
+        "--out",
+        dir.path().join("night").to_str().unwrap(),
+        "--history",
+        history.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("line 1"), "{}", text(&o));
+    assert_eq!(
+        std::fs::read_to_string(&history).unwrap(),
+        "{\"night\": 1\n",
+        "history untouched"
+    );
+    assert!(!dir.path().join("night").exists(), "nothing run");
+}
+
+#[test]
+fn nightly_without_liggghts_says_how_to_install_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = verify(&[
+        "nightly",
+        "--quick",
+        "--out",
+        dir.path().join("night").to_str().unwrap(),
+        "--liggghts",
+        "/nonexistent/liggghts",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(
+        text(&o).contains("apt-get install -y liggghts"),
+        "{}",
+        text(&o)
+    );
+}
