@@ -53,6 +53,9 @@ pub enum Command {
     /// Every contact case and the nightly shear cases in both codes: report.html, summary.json,
     /// history.
     Nightly(crate::cli_nightly::NightlyArgs),
+    /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,
+    /// report with the paper's figures and conclusions.
+    Sweep(crate::cli_sweep::SweepArgs),
     /// Throughput of both codes on the same dense shear state (particle-steps per second).
     Bench(crate::bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
@@ -106,6 +109,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Shear(a) => crate::cli_shear::shear(a),
         Command::Bench(a) => crate::bench::bench(a),
         Command::Nightly(a) => crate::cli_nightly::nightly(a),
+        Command::Sweep(a) => crate::cli_sweep::sweep(a),
         Command::Convergence(a) => crate::cli_convergence::convergence(a),
         Command::Decks { out } => {
             let n = write_decks(&out)?;

@@ -50,6 +50,11 @@ pub struct ShearArgs {
     /// Shear strain of each stage (replaces the preset's).
     #[arg(long)]
     pub strain: Option<f64>,
+    /// Time step as a multiple of the preset's (compression steps and output interval scale
+    /// with 1 / factor, so the same physical time and strain are covered): runs a case at a
+    /// converged dt, e.g. 0.25.
+    #[arg(long, default_value_t = 1.0)]
+    pub dt_factor: f64,
     /// Threads of the native solver (default: all cores, minus one while LIGGGHTS runs).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -175,6 +180,19 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
         c.box_x = (c.box_x * scale / w).round().max(1.0) * w;
         c.box_z = area / c.box_x;
         c.particles = n;
+    }
+    if !(a.dt_factor.is_finite() && a.dt_factor > 0.0 && a.dt_factor <= 1.0) {
+        return Err(Error::invalid(
+            "--dt-factor",
+            a.dt_factor,
+            "a number in (0, 1]",
+        ));
+    }
+    if a.dt_factor != 1.0 {
+        c.dt *= a.dt_factor;
+        c.compression_steps = (c.compression_steps as f64 / a.dt_factor).round() as u64;
+        c.output_every = ((c.output_every as f64 / a.dt_factor).round() as u64).max(1);
+        c.snapshot_every = (c.snapshot_every as f64 / a.dt_factor).round() as u64;
     }
     let w = c.validate(a.allow_inertial)?;
     Ok((c, w))
@@ -363,6 +381,15 @@ pub fn shear(a: ShearArgs) -> Result<Outcome> {
 /// compares them, writes plots and `summary.json` into the output directory, and returns the
 /// summary.
 pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
+    // a caller with a display of its own (a sweep) gets warnings only
+    let quiet = a.hide_progress;
+    macro_rules! say {
+        ($($t:tt)*) => {
+            if !quiet {
+                println!($($t)*)
+            }
+        };
+    }
     if !(a.mu_atol.is_finite() && a.mu_atol > 0.0 && a.mu_atol < 1.0) {
         return Err(Error::invalid("--mu-atol", a.mu_atol, "a number in (0, 1)"));
     }
@@ -408,7 +435,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
     let inertial: Vec<f64> = (0..case0.stages.len())
         .map(|k| case0.inertial_number(k))
         .collect();
-    println!(
+    say!(
         "verify shear: preset {}, {} particles, rolling {} (mu_r {}, eta_r {}), {} seed(s), dt {:e} s, {} steps per seed",
         a.preset,
         case0.particles,
@@ -419,19 +446,19 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         case0.dt,
         case0.total_steps()
     );
-    println!(
+    say!(
         "  inertial number I = {}; contact stiffness number kappa = {:.0}; native threads {threads}; output {}",
         inertial.iter().map(|i| format!("{i:.2e}")).collect::<Vec<_>>().join(", "),
         case0.kappa(),
         out.display()
     );
-    for w in &cases[0].1 {
+    for w in cases[0].1.iter().filter(|_| !quiet) {
         eprintln!("warning: {w}");
     }
     let stab = crate::spec::stability_shear::stability(case0);
-    println!("  stability (worst first; S = n (omega_r^2 dt^2 + 2 lambda dt), explicit dashpot unstable at S >= 4):");
+    say!("  stability (worst first; S = n (omega_r^2 dt^2 + 2 lambda dt), explicit dashpot unstable at S >= 4):");
     for l in stab.lines(3) {
-        println!("    {l}");
+        say!("    {l}");
     }
     if !stab.stable {
         let msg = format!(
@@ -446,7 +473,9 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
                 format!("a stable explicit rolling dashpot (--strict-stability): {msg}"),
             ));
         }
-        eprintln!("warning: {msg}");
+        if !quiet {
+            eprintln!("warning: {msg}");
+        }
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -472,7 +501,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         let (lr, nr) = std::thread::scope(|sc| {
             let lh = match (&lig, cached(&dir, "liggghts", case)) {
                 (_, Some(c)) if run_lig => {
-                    println!("  seed {}: LIGGGHTS result found, reused", case.seed);
+                    say!("  seed {}: LIGGGHTS result found, reused", case.seed);
                     Some(sc.spawn(move || Ok(c)))
                 }
                 (Some(l), _) => {
@@ -489,7 +518,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             let nr = if run_nat {
                 Some(match cached(&dir, "native", case) {
                     Some(c) => {
-                        println!("  seed {}: native result found, reused", case.seed);
+                        say!("  seed {}: native result found, reused", case.seed);
                         Ok(c)
                     }
                     None => {
@@ -556,7 +585,9 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             liggghts_particle_steps_per_s: lr.as_ref().map(|r| r.throughput(case.particles)),
             native_particle_steps_per_s: nr.as_ref().map(|r| r.throughput(case.particles)),
         };
-        print_seed(&sr);
+        if !quiet {
+            print_seed(&sr);
+        }
         seeds.push(sr);
         lig_series.extend(ls);
         nat_series.extend(ns);
@@ -631,14 +662,15 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
-    println!();
-    println!(
+    say!();
+    say!(
         "steady window: steps {}..{} (second half of the last stage)",
-        window.0, window.1
+        window.0,
+        window.1
     );
     for (code, st) in [("LIGGGHTS", &ls), ("native", &ns)] {
         if let Some(st) = st {
-            println!(
+            say!(
                 "  {code:<8} mu = {:.4} +- {:.4} (95 % CI)  per seed [{}]  normal stress [{}] MPa",
                 st.mu,
                 st.mu_ci95,
@@ -656,7 +688,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         }
     }
     for r in &summary.results {
-        println!(
+        say!(
             "  {:<22} {:>10.4e} (limit {:.2e} {})  {}",
             r.channel,
             if r.channel == "mu_steady" {
@@ -673,7 +705,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             if r.pass { "ok" } else { "FAIL" }
         );
     }
-    println!(
+    say!(
         "plots: {}  summary: {}",
         out.join("mu_strain.svg").display(),
         out.join("summary.json").display()

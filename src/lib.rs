@@ -12,6 +12,7 @@ pub mod cli;
 pub mod cli_convergence;
 pub mod cli_nightly;
 pub mod cli_shear;
+pub mod cli_sweep;
 pub mod compare;
 pub mod deck;
 pub mod error;
@@ -23,5 +24,6 @@ pub mod series;
 pub mod shear;
 pub mod solver;
 pub mod spec;
+pub mod sweep;
 
 pub use error::{Error, Result};

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# One command: install LIGGGHTS (Debian package) and Chromium (the tests render the nightly
-# report in it), build, and run the default case.
+# One command: install LIGGGHTS (Debian package), Chromium (the tests render the nightly
+# report in it) and SLURM (the sweep's scheduler test), build, and run the default case.
 # Usage: bash tools/setup.sh        (as root, or with sudo available)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,6 +9,8 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 missing=()
 command -v liggghts >/dev/null 2>&1 || missing+=(liggghts libliggghts-dev)
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+# a local SLURM for the sweep's scheduler test (tools/slurm-local.sh starts it; needs root)
+command -v slurmctld >/dev/null 2>&1 || missing+=(slurmctld slurmd slurm-client munge)
 if [ "${#missing[@]}" -gt 0 ]; then
   $SUDO apt-get update
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y "${missing[@]}"

@@ -4,6 +4,7 @@ pub mod bars;
 pub mod contact;
 pub mod history;
 pub mod html;
+pub mod paper;
 pub mod plot;
 pub mod progress;
 pub mod vtk;

@@ -21,6 +21,8 @@ pub struct Curve<'a> {
     pub color: usize,
     pub faint: bool,
     pub dashed: bool,
+    /// Half-widths of vertical error bars, one per point (non-finite: none drawn).
+    pub err: Option<&'a [f64]>,
 }
 
 impl<'a> Curve<'a> {
@@ -32,7 +34,13 @@ impl<'a> Curve<'a> {
             color,
             faint: false,
             dashed: false,
+            err: None,
         }
+    }
+    /// With vertical error bars of half-width `err[i]` at point i.
+    pub fn with_err(mut self, err: &'a [f64]) -> Self {
+        self.err = Some(err);
+        self
     }
     /// Drawn faint (thin, transparent).
     pub fn faint(mut self) -> Self {
@@ -98,7 +106,13 @@ pub fn line_plot(
     }
     let pts = curves
         .iter()
-        .flat_map(|c| c.points.iter())
+        .flat_map(|c| {
+            c.points.iter().enumerate().flat_map(|(i, p)| {
+                let e = c.err.and_then(|e| e.get(i)).copied().unwrap_or(0.0);
+                let e = if e.is_finite() { e } else { 0.0 };
+                [(p.0, p.1 - e), (p.0, p.1 + e)]
+            })
+        })
         .filter(|p| p.0.is_finite() && p.1.is_finite());
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
@@ -163,6 +177,21 @@ pub fn line_plot(
                     .filter(|p| p.0.is_finite() && p.1.is_finite());
                 chart
                     .draw_series(marks.map(|p| Circle::new(p, 4, color.filled())))
+                    .map_err(|e| err(e.to_string()))?;
+            }
+            if let Some(half) = c.err {
+                let bars = c
+                    .points
+                    .iter()
+                    .zip(half)
+                    .filter(|(p, e)| p.0.is_finite() && p.1.is_finite() && e.is_finite());
+                chart
+                    .draw_series(bars.map(|(p, e)| {
+                        PathElement::new(
+                            vec![(p.0, p.1 - e), (p.0, p.1 + e)],
+                            color.stroke_width(1),
+                        )
+                    }))
                     .map_err(|e| err(e.to_string()))?;
             }
             let series = if c.dashed {

@@ -1,0 +1,499 @@
+//! The paper's figures and conclusions from a sweep's results (Sac-Morane, Rattez & Veveakis
+//! 2022): steady mu against mu_r per eta_r and speed (their Figs 5-7), mu against shear speed
+//! (Figs 12-15), a heat map over (mu_r, eta_r), and the three conclusions checked in numbers.
+
+use crate::compare::mean_ci95;
+use crate::report::bars::escape;
+use crate::sweep::RunResult;
+use serde::Serialize;
+use std::fmt::Write;
+
+/// Mean over seeds of one code at one (mu_r, eta_r, stage).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Point {
+    pub code: String,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    pub stage: usize,
+    pub speed: f64,
+    pub mu: f64,
+    /// 95 % CI half-width over seeds (infinite with one seed).
+    pub mu_ci95: f64,
+    pub seeds: usize,
+    pub erot: f64,
+    pub dashpot_stable: bool,
+    pub stability_s: f64,
+}
+
+/// Aggregates run results into points, sorted by code, stage, eta_r, mu_r.
+pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
+    let mut pts: Vec<Point> = Vec::new();
+    let mut keys: Vec<(String, u64, u64, usize)> = Vec::new();
+    for r in results {
+        for (k, st) in r.stages.iter().enumerate() {
+            for (code, c) in [("liggghts", &st.liggghts), ("native", &st.native)] {
+                if c.is_some() {
+                    let key = (code.to_string(), r.mu_r.to_bits(), r.eta_r.to_bits(), k);
+                    if !keys.contains(&key) {
+                        keys.push(key);
+                    }
+                }
+            }
+        }
+    }
+    for (code, m, e, k) in keys {
+        let (mu_r, eta_r) = (f64::from_bits(m), f64::from_bits(e));
+        let runs: Vec<&RunResult> = results
+            .iter()
+            .filter(|r| r.mu_r == mu_r && r.eta_r == eta_r && r.stages.len() > k)
+            .collect();
+        let vals: Vec<(f64, f64)> = runs
+            .iter()
+            .filter_map(|r| {
+                let st = &r.stages[k];
+                let c = if code == "native" {
+                    &st.native
+                } else {
+                    &st.liggghts
+                };
+                c.as_ref().map(|c| (c.mu, c.erot))
+            })
+            .collect();
+        let mus: Vec<f64> = vals.iter().map(|v| v.0).collect();
+        let (mu, ci) = mean_ci95(&mus);
+        pts.push(Point {
+            code,
+            mu_r,
+            eta_r,
+            stage: k,
+            speed: runs[0].stages[k].speed,
+            mu,
+            mu_ci95: ci,
+            seeds: mus.len(),
+            erot: vals.iter().map(|v| v.1).sum::<f64>() / vals.len() as f64,
+            dashpot_stable: runs.iter().all(|r| r.dashpot_stable),
+            stability_s: runs.iter().map(|r| r.stability_s).fold(0.0, f64::max),
+        });
+    }
+    pts.sort_by(|a, b| {
+        (a.code.as_str(), a.stage)
+            .cmp(&(b.code.as_str(), b.stage))
+            .then(a.eta_r.total_cmp(&b.eta_r))
+            .then(a.mu_r.total_cmp(&b.mu_r))
+    });
+    pts
+}
+
+/// One parameter curve's answer to a claim.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Verdict {
+    Agree,
+    Disagree,
+    /// The difference is within the confidence intervals.
+    Unresolved,
+}
+
+/// The claim's verdict over its curves: agrees / disagrees (every resolved curve one way),
+/// partly agrees (both), not resolved (no curve resolved), not assessable (no curve).
+fn combine(v: &[Verdict]) -> String {
+    let agree = v.contains(&Verdict::Agree);
+    let disagree = v.contains(&Verdict::Disagree);
+    match (v.is_empty(), agree, disagree) {
+        (true, _, _) => "not assessable",
+        (_, true, false) => "agrees",
+        (_, false, true) => "disagrees",
+        (_, true, true) => "partly agrees",
+        (_, false, false) => "not resolved",
+    }
+    .into()
+}
+
+/// One of the paper's conclusions, checked in numbers.
+#[derive(Clone, Debug, Serialize)]
+pub struct Conclusion {
+    pub claim: String,
+    /// `agrees`, `partly agrees`, `disagrees`, `not resolved` (within the CIs) or
+    /// `not assessable` (the sweep lacks the points).
+    pub verdict: String,
+    pub evidence: String,
+}
+
+fn ci(p: &Point) -> f64 {
+    if p.mu_ci95.is_finite() {
+        p.mu_ci95
+    } else {
+        0.0
+    }
+}
+
+/// The critical mu_r of one (code, stage, eta_r) curve: the mu_r of the largest mu when mu at
+/// the largest mu_r is significantly lower (by more than the two CIs), else None.
+pub fn critical_mu_r(curve: &[&Point]) -> Option<(f64, f64)> {
+    let best = curve.iter().max_by(|a, b| a.mu.total_cmp(&b.mu))?;
+    let last = curve.last()?;
+    let drop = best.mu - last.mu;
+    (best.mu_r < last.mu_r && drop > ci(best) + ci(last)).then_some((best.mu_r, drop))
+}
+
+/// The three conclusions for one code's points (the paper: with eta_r = 0 mu rises with mu_r;
+/// with eta_r > 0 there is a critical mu_r beyond which mu falls; a speed effect only near that
+/// critical point).
+pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
+    let pts: Vec<&Point> = points.iter().filter(|p| p.code == code).collect();
+    let stages: Vec<usize> = {
+        let mut s: Vec<usize> = pts.iter().map(|p| p.stage).collect();
+        s.dedup();
+        s
+    };
+    let curve = |stage: usize, eta: f64| -> Vec<&Point> {
+        pts.iter()
+            .copied()
+            .filter(|p| p.stage == stage && p.eta_r == eta)
+            .collect()
+    };
+    let mut etas: Vec<f64> = pts.iter().map(|p| p.eta_r).collect();
+    etas.sort_by(f64::total_cmp);
+    etas.dedup();
+    let mut out = Vec::new();
+
+    // 1. eta_r = 0: mu rises with mu_r
+    let mut ev = Vec::new();
+    let mut verdicts = Vec::new();
+    for &s in &stages {
+        let c = curve(s, 0.0);
+        if c.len() < 2 {
+            continue;
+        }
+        let (first, last) = (c[0], c[c.len() - 1]);
+        let rise = last.mu - first.mu;
+        let sig = ci(first) + ci(last);
+        verdicts.push(if rise > sig {
+            Verdict::Agree
+        } else if rise < -sig {
+            Verdict::Disagree
+        } else {
+            Verdict::Unresolved
+        });
+        ev.push(format!(
+            "v = {} m/s: mu {:.3} at mu_r {} -> {:.3} at mu_r {} (change {:+.3}, CIs {:.3}/{:.3}){}",
+            first.speed,
+            first.mu,
+            first.mu_r,
+            last.mu,
+            last.mu_r,
+            rise,
+            ci(first),
+            ci(last),
+            if rise.abs() > sig { "" } else { ": within the CIs" }
+        ));
+    }
+    out.push(Conclusion {
+        claim: "with eta_r = 0, mu rises with mu_r".into(),
+        verdict: combine(&verdicts),
+        evidence: if ev.is_empty() {
+            "the sweep has no eta_r = 0 curve with two mu_r values".into()
+        } else {
+            ev.join("; ")
+        },
+    });
+
+    // 2. eta_r > 0: a critical mu_r beyond which mu falls
+    let mut ev = Vec::new();
+    let mut verdicts = Vec::new();
+    let mut criticals: Vec<(usize, f64, f64)> = Vec::new();
+    for &s in &stages {
+        for &e in etas.iter().filter(|&&e| e > 0.0) {
+            let c = curve(s, e);
+            if c.len() < 3 {
+                continue;
+            }
+            let unstable = if c.iter().any(|p| !p.dashpot_stable) {
+                " [explicit dashpot unstable at some of these points]"
+            } else {
+                ""
+            };
+            match critical_mu_r(&c) {
+                Some((m, drop)) => {
+                    verdicts.push(Verdict::Agree);
+                    criticals.push((s, e, m));
+                    ev.push(format!(
+                        "v = {} m/s, eta_r {e}: critical mu_r = {m} (mu falls by {drop:.3} up to mu_r {}){unstable}",
+                        c[0].speed,
+                        c[c.len() - 1].mu_r,
+                    ));
+                }
+                None => {
+                    let (first, last) = (c[0], c[c.len() - 1]);
+                    let rises = last.mu - first.mu > ci(first) + ci(last);
+                    verdicts.push(if rises {
+                        Verdict::Disagree
+                    } else {
+                        Verdict::Unresolved
+                    });
+                    ev.push(format!(
+                        "v = {} m/s, eta_r {e}: no significant fall of mu up to mu_r {} ({}){unstable}",
+                        c[0].speed,
+                        last.mu_r,
+                        if rises {
+                            "mu rises with mu_r"
+                        } else {
+                            "differences within the CIs"
+                        }
+                    ));
+                }
+            }
+        }
+    }
+    out.push(Conclusion {
+        claim: "with eta_r > 0, there is a critical mu_r beyond which mu falls".into(),
+        verdict: combine(&verdicts),
+        evidence: if ev.is_empty() {
+            "needs eta_r > 0 with at least three mu_r values".into()
+        } else {
+            ev.join("; ")
+        },
+    });
+
+    // 3. speed effect only near the critical mu_r
+    let claim3 = "a speed effect only near the critical mu_r".to_string();
+    if stages.len() < 2 {
+        out.push(Conclusion {
+            claim: claim3,
+            verdict: "not assessable".into(),
+            evidence: "the sweep ran one shear speed; pass --speeds v1,v2,v3 to test it".into(),
+        });
+        return out;
+    }
+    let (s0, s1) = (stages[0], stages[stages.len() - 1]);
+    let mut mu_rs: Vec<f64> = pts.iter().map(|p| p.mu_r).collect();
+    mu_rs.sort_by(f64::total_cmp);
+    mu_rs.dedup();
+    let step = mu_rs
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    let mut near_ok = true;
+    let mut ev = Vec::new();
+    for &e in &etas {
+        let (a, b) = (curve(s0, e), curve(s1, e));
+        for (p, q) in a.iter().zip(&b) {
+            let d = q.mu - p.mu;
+            if d.abs() <= ci(p) + ci(q) {
+                continue;
+            }
+            let near = criticals
+                .iter()
+                .any(|&(_, ce, cm)| ce == e && (cm - p.mu_r).abs() <= step * 1.01);
+            near_ok &= near;
+            ev.push(format!(
+                "eta_r {e}, mu_r {}: mu {:+.3} from v = {} to {} m/s ({} the critical mu_r)",
+                p.mu_r,
+                d,
+                p.speed,
+                q.speed,
+                if near { "near" } else { "away from" }
+            ));
+        }
+    }
+    out.push(Conclusion {
+        claim: claim3,
+        verdict: if ev.is_empty() && criticals.is_empty() {
+            "not resolved".into()
+        } else if ev.is_empty() || !near_ok {
+            "disagrees".into()
+        } else {
+            "agrees".into()
+        },
+        evidence: if ev.is_empty() {
+            "no significant speed effect at any point".into()
+        } else {
+            ev.join("; ")
+        },
+    });
+    out
+}
+
+/// Heat map of mu over (mu_r, eta_r) for one code and stage; unstable points are marked.
+pub fn heat_map(title: &str, points: &[&Point]) -> String {
+    let mut mus: Vec<f64> = points.iter().map(|p| p.mu_r).collect();
+    mus.sort_by(f64::total_cmp);
+    mus.dedup();
+    let mut etas: Vec<f64> = points.iter().map(|p| p.eta_r).collect();
+    etas.sort_by(f64::total_cmp);
+    etas.dedup();
+    let (lo, hi) = points
+        .iter()
+        .filter(|p| p.mu.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.mu), b.max(p.mu))
+        });
+    let (cw, ch) = (110.0, 60.0);
+    let (left, top) = (90.0, 50.0);
+    let w = left + cw * mus.len() as f64 + 30.0;
+    let h = top + ch * etas.len() as f64 + 90.0;
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        r#"<svg width="{w}" height="{h}" viewBox="0 0 {w} {h}" xmlns="http://www.w3.org/2000/svg"><rect width="{w}" height="{h}" fill="white"/><text x="{}" y="24" font-family="sans-serif" font-size="16" text-anchor="middle">{}</text>"#,
+        w / 2.0,
+        escape(title)
+    );
+    // colour: light yellow (low mu) to dark blue (high mu)
+    let color = |v: f64| {
+        let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+        let lerp = |a: f64, b: f64| (a + (b - a) * t).round() as u8;
+        (lerp(255.0, 8.0), lerp(247.0, 48.0), lerp(188.0, 107.0), t)
+    };
+    for (i, m) in mus.iter().enumerate() {
+        let _ = write!(
+            s,
+            r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="13" text-anchor="middle">{m}</text>"#,
+            left + cw * (i as f64 + 0.5),
+            top + ch * etas.len() as f64 + 18.0
+        );
+    }
+    let _ = write!(
+        s,
+        r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="13" text-anchor="middle">mu_r</text>"#,
+        left + cw * mus.len() as f64 / 2.0,
+        top + ch * etas.len() as f64 + 38.0
+    );
+    for (j, e) in etas.iter().enumerate() {
+        // eta_r grows upwards
+        let y = top + ch * (etas.len() - 1 - j) as f64;
+        let _ = write!(
+            s,
+            r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="13" text-anchor="end">eta_r {e}</text>"#,
+            left - 8.0,
+            y + ch / 2.0 + 4.0
+        );
+        for (i, m) in mus.iter().enumerate() {
+            let x = left + cw * i as f64;
+            let Some(p) = points.iter().find(|p| p.mu_r == *m && p.eta_r == *e) else {
+                continue;
+            };
+            let (r, g, b, t) = color(p.mu);
+            let ink = if t > 0.55 { "white" } else { "black" };
+            let _ = write!(
+                s,
+                r##"<rect x="{x:.1}" y="{y:.1}" width="{cw}" height="{ch}" fill="rgb({r},{g},{b})" stroke="{}" stroke-width="{}"><title>mu_r {m}, eta_r {e}: mu {:.4} ± {:.4}, S = {:.1}</title></rect><text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="14" text-anchor="middle" fill="{ink}">{:.3}{}</text>"##,
+                if p.dashpot_stable { "#fff" } else { "#d62728" },
+                if p.dashpot_stable { 1 } else { 3 },
+                p.mu,
+                p.mu_ci95,
+                p.stability_s,
+                x + cw / 2.0,
+                y + ch / 2.0 + 5.0,
+                p.mu,
+                if p.dashpot_stable { "" } else { " †" }
+            );
+        }
+    }
+    let _ = write!(
+        s,
+        r#"<text x="{left}" y="{:.1}" font-family="sans-serif" font-size="12">† red frame: explicit rolling dashpot unstable at this dt (S ≥ 4)</text>"#,
+        h - 14.0
+    );
+    s + "</svg>"
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::{CodeStage, StageResult};
+
+    fn run(mu_r: f64, eta_r: f64, seed: u64, mus: &[f64]) -> RunResult {
+        RunResult {
+            index: 0,
+            id: format!("{mu_r}_{eta_r}_{seed}"),
+            mu_r,
+            eta_r,
+            seed,
+            input_hash: String::new(),
+            dt: 1e-6,
+            dashpot_stable: mu_r < 1.0,
+            stability_s: 1.0,
+            stages: mus
+                .iter()
+                .enumerate()
+                .map(|(k, &mu)| StageResult {
+                    speed: 0.01 * (k + 1) as f64,
+                    window_steps: (0, 1),
+                    liggghts: None,
+                    native: Some(CodeStage {
+                        mu,
+                        normal_stress: 1e7,
+                        erot: 1e-6,
+                    }),
+                })
+                .collect(),
+            liggghts_wall_s: None,
+            native_wall_s: Some(1.0),
+            date_utc: String::new(),
+        }
+    }
+
+    /// A synthetic map shaped like the paper's: rising at eta_r = 0, a peak at mu_r 0.5 with
+    /// eta_r 0.5, a speed effect only there.
+    fn paper_like() -> Vec<RunResult> {
+        let mut r = Vec::new();
+        for seed in 1..=3 {
+            let n = 0.002 * seed as f64;
+            for (m, a, b) in [(0.0, 0.30, 0.30), (0.5, 0.40, 0.40), (1.0, 0.50, 0.50)] {
+                r.push(run(m, 0.0, seed, &[a + n, b + n]));
+            }
+            for (m, a, b) in [(0.0, 0.30, 0.30), (0.5, 0.45, 0.35), (1.0, 0.25, 0.25)] {
+                r.push(run(m, 0.5, seed, &[a + n, b + n]));
+            }
+        }
+        r
+    }
+
+    #[test]
+    fn aggregates_over_seeds() {
+        let p = aggregate(&paper_like());
+        assert_eq!(p.len(), 12);
+        let q = p
+            .iter()
+            .find(|p| p.mu_r == 0.5 && p.eta_r == 0.5 && p.stage == 0)
+            .unwrap();
+        assert!((q.mu - 0.454).abs() < 1e-12 && q.seeds == 3);
+        assert!(q.mu_ci95 > 0.0 && q.mu_ci95 < 0.01);
+        assert!(!p.iter().find(|p| p.mu_r == 1.0).unwrap().dashpot_stable);
+    }
+
+    #[test]
+    fn checks_the_three_conclusions() {
+        let c = conclusions(&aggregate(&paper_like()), "native");
+        assert_eq!(c.len(), 3);
+        assert_eq!(c[0].verdict, "agrees", "{}", c[0].evidence);
+        assert_eq!(c[1].verdict, "agrees", "{}", c[1].evidence);
+        assert!(c[1].evidence.contains("critical mu_r = 0.5"));
+        assert_eq!(c[2].verdict, "agrees", "{}", c[2].evidence);
+        // a map where mu falls with mu_r at eta_r = 0 and rises everywhere else disagrees
+        let mut r = paper_like();
+        for x in &mut r {
+            if x.eta_r == 0.0 {
+                for st in &mut x.stages {
+                    st.native.as_mut().unwrap().mu = 0.6 - 0.3 * x.mu_r;
+                }
+            } else {
+                for st in &mut x.stages {
+                    st.native.as_mut().unwrap().mu = 0.3 + 0.3 * x.mu_r;
+                }
+            }
+        }
+        let c = conclusions(&aggregate(&r), "native");
+        assert_eq!(c[0].verdict, "disagrees");
+        assert_eq!(c[1].verdict, "disagrees");
+        let h = heat_map(
+            "mu",
+            &aggregate(&r)
+                .iter()
+                .filter(|p| p.stage == 0)
+                .collect::<Vec<_>>(),
+        );
+        assert_eq!(h.matches("<rect x=").count(), 6);
+        assert_eq!(h.matches(" †</text>").count(), 2, "mu_r 1 is unstable");
+    }
+}

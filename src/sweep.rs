@@ -1,0 +1,448 @@
+//! The parametric study: a manifest of runs (one per (mu_r, eta_r, seed)), each run's result
+//! written atomically next to the hash of its inputs, and the collection of results.
+//!
+//! Resumption rule: a run is done when `runs/<id>/result.json` exists and carries the same input
+//! hash as the manifest entry; anything else (missing, older inputs, another code version) is
+//! run again. The hash covers the full shear case of the seed (materials, box, protocol, dt,
+//! rolling model and coefficients), the engine and the crate version, as FNV-1a 64 of its JSON.
+
+use crate::cli_shear::{shear_case, shear_run, ShearArgs};
+use crate::compare::steady_window;
+use crate::error::{Error, Result};
+use crate::fsutil::{read_to_string, write_atomic};
+use crate::series::Series;
+use crate::shear::run_ends;
+use crate::spec::stability_shear::stability;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Which codes a sweep runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Engine {
+    Native,
+    Liggghts,
+    Both,
+}
+
+impl Engine {
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "native" => Ok(Engine::Native),
+            "liggghts" => Ok(Engine::Liggghts),
+            "both" => Ok(Engine::Both),
+            _ => Err(Error::Unknown {
+                what: "engine",
+                name: s.into(),
+                valid: "native, liggghts, both".into(),
+            }),
+        }
+    }
+    /// CPU cores one run occupies (both codes run side by side).
+    pub fn cores(self) -> usize {
+        if self == Engine::Both {
+            2
+        } else {
+            1
+        }
+    }
+}
+
+/// What every run of a sweep shares.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepBase {
+    pub preset: String,
+    pub rolling: String,
+    pub engine: Engine,
+    /// Shear speeds [m/s] replacing the preset's stages (None: the preset's).
+    pub speeds: Option<Vec<f64>>,
+    /// Strain of each stage (None: the preset's).
+    pub strain: Option<f64>,
+    /// Time step factor applied to the preset's dt (1: the preset's dt).
+    pub dt_factor: f64,
+}
+
+/// One run: a parameter point and a seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunSpec {
+    pub index: usize,
+    pub id: String,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    pub seed: u64,
+    pub input_hash: String,
+}
+
+/// `DIR/manifest.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub schema: u32,
+    pub created_utc: String,
+    pub base: SweepBase,
+    pub runs: Vec<RunSpec>,
+}
+
+/// FNV-1a, 64 bit: a stable hash (std's hasher may change between Rust versions).
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+impl Manifest {
+    /// The runs of a sweep over `mu_r x eta_r x seeds`, validated (each case is built once).
+    pub fn plan(
+        base: SweepBase,
+        mu_r: &[f64],
+        eta_r: &[f64],
+        seeds: u64,
+        created_utc: String,
+    ) -> Result<Self> {
+        if mu_r.is_empty() || eta_r.is_empty() {
+            return Err(Error::invalid(
+                "--mu-r/--eta-r",
+                "(empty)",
+                "at least one value each",
+            ));
+        }
+        if seeds == 0 || seeds > 1000 {
+            return Err(Error::invalid("--seeds", seeds, "1 ..= 1000"));
+        }
+        let mut runs = Vec::new();
+        for &m in mu_r {
+            for &e in eta_r {
+                for seed in 1..=seeds {
+                    let index = runs.len();
+                    let mut r = RunSpec {
+                        index,
+                        id: format!("mur{m}_etar{e}_s{seed}"),
+                        mu_r: m,
+                        eta_r: e,
+                        seed,
+                        input_hash: String::new(),
+                    };
+                    r.input_hash = input_hash(&base, &r)?;
+                    runs.push(r);
+                }
+            }
+        }
+        let mut ids: Vec<&str> = runs.iter().map(|r| r.id.as_str()).collect();
+        ids.sort();
+        if ids.windows(2).any(|w| w[0] == w[1]) {
+            return Err(Error::invalid(
+                "--mu-r/--eta-r",
+                "repeated values",
+                "distinct values",
+            ));
+        }
+        Ok(Manifest {
+            schema: 1,
+            created_utc,
+            base,
+            runs,
+        })
+    }
+
+    /// Whether this manifest can replace `old` in the same directory: the same shared settings,
+    /// and every run id in both with the same inputs (more seeds or points may be added).
+    pub fn compatible_with(&self, old: &Manifest) -> bool {
+        self.base == old.base
+            && old.runs.iter().all(|o| {
+                self.runs
+                    .iter()
+                    .find(|r| r.id == o.id)
+                    .is_none_or(|r| r.input_hash == o.input_hash)
+            })
+    }
+
+    pub fn load(path: &Path) -> Result<Self> {
+        let m: Manifest =
+            serde_json::from_str(&read_to_string(path)?).map_err(|e| Error::Parse {
+                path: path.to_path_buf(),
+                msg: e.to_string(),
+            })?;
+        if m.schema != 1 {
+            return Err(Error::invalid("manifest schema", m.schema, "1"));
+        }
+        Ok(m)
+    }
+
+    pub fn save(&self, path: &Path) -> Result<()> {
+        write_atomic(path, serde_json::to_string_pretty(self)?.as_bytes())
+    }
+
+    pub fn run(&self, index: usize) -> Result<&RunSpec> {
+        self.runs.get(index).ok_or_else(|| {
+            Error::invalid(
+                "--index",
+                index,
+                format!("0 ..= {} (the manifest's runs)", self.runs.len() - 1),
+            )
+        })
+    }
+}
+
+/// The `verify shear` arguments of one run (one seed).
+pub fn shear_args(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) -> ShearArgs {
+    ShearArgs {
+        mu_r: r.mu_r,
+        eta_r: r.eta_r,
+        rolling: base.rolling.clone(),
+        preset: base.preset.clone(),
+        seeds: 1,
+        first_seed: r.seed,
+        speeds: base.speeds.clone(),
+        strain: base.strain,
+        dt_factor: base.dt_factor,
+        threads: Some(threads),
+        out: Some(dir.to_path_buf()),
+        native_only: base.engine == Engine::Native,
+        liggghts_only: base.engine == Engine::Liggghts,
+        hide_progress: true,
+        ..ShearArgs::defaults()
+    }
+}
+
+fn input_hash(base: &SweepBase, r: &RunSpec) -> Result<String> {
+    let args = shear_args(base, r, Path::new("."), 1);
+    let (case, _) = shear_case(&args, r.seed)?;
+    let text = format!(
+        "{}|{:?}|{}",
+        serde_json::to_string(&case)?,
+        base.engine,
+        env!("CARGO_PKG_VERSION")
+    );
+    Ok(format!("{:016x}", fnv1a(text.as_bytes())))
+}
+
+/// One code's steady figures in one stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CodeStage {
+    /// Mean mu, normal stress [Pa] and rotational kinetic energy [J] over the stage's steady
+    /// window (its second half).
+    pub mu: f64,
+    pub normal_stress: f64,
+    pub erot: f64,
+}
+
+/// Steady figures of one shear stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageResult {
+    pub speed: f64,
+    pub window_steps: (u64, u64),
+    pub liggghts: Option<CodeStage>,
+    pub native: Option<CodeStage>,
+}
+
+/// `runs/<id>/result.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunResult {
+    pub index: usize,
+    pub id: String,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    pub seed: u64,
+    pub input_hash: String,
+    pub dt: f64,
+    /// Explicit rolling dashpot stable at this dt, and the worst criterion S (unstable >= 4).
+    pub dashpot_stable: bool,
+    pub stability_s: f64,
+    pub stages: Vec<StageResult>,
+    pub liggghts_wall_s: Option<f64>,
+    pub native_wall_s: Option<f64>,
+    pub date_utc: String,
+}
+
+pub fn run_dir(sweep: &Path, r: &RunSpec) -> PathBuf {
+    sweep.join("runs").join(&r.id)
+}
+
+/// The stored result of a run if it is current (same input hash), else None.
+pub fn current_result(sweep: &Path, r: &RunSpec) -> Option<RunResult> {
+    let text = std::fs::read_to_string(run_dir(sweep, r).join("result.json")).ok()?;
+    let res: RunResult = serde_json::from_str(&text).ok()?;
+    (res.input_hash == r.input_hash).then_some(res)
+}
+
+/// Runs one entry of the manifest (unless its current result exists) and writes its result
+/// atomically. Returns the result and whether it was run now.
+pub fn run_one(
+    m: &Manifest,
+    sweep: &Path,
+    index: usize,
+    threads: usize,
+) -> Result<(RunResult, bool)> {
+    let r = m.run(index)?;
+    if let Some(res) = current_result(sweep, r) {
+        return Ok((res, false));
+    }
+    let dir = run_dir(sweep, r);
+    let args = shear_args(&m.base, r, &dir, threads);
+    let (case, _) = shear_case(&args, r.seed)?;
+    if input_hash(&m.base, r)? != r.input_hash {
+        return Err(Error::invalid(
+            "manifest",
+            format!("run {} ({})", r.index, r.id),
+            "a manifest written by this version of verify (its input hash no longer matches: \
+             plan the sweep again)",
+        ));
+    }
+    let summary = shear_run(&args)?;
+    let ends = run_ends(&case);
+    let series = |code: &str| -> Result<Option<Series>> {
+        let p = dir
+            .join(format!("seed{}", r.seed))
+            .join(format!("{code}.csv"));
+        if p.is_file() {
+            Ok(Some(Series::read_csv(&p)?))
+        } else {
+            Ok(None)
+        }
+    };
+    let (ls, ns) = (series("liggghts")?, series("native")?);
+    let area = case.box_x * case.box_z;
+    let stage = |s: &Option<Series>, w: (u64, u64)| {
+        s.as_ref().map(|s| CodeStage {
+            mu: s.window_mean("mu[-]", w),
+            normal_stress: s.window_mean("top_f_y[N]", w) / area,
+            erot: s.window_mean("erot[J]", w),
+        })
+    };
+    let stages = case
+        .stages
+        .iter()
+        .enumerate()
+        .map(|(k, st)| {
+            let w = steady_window(ends[k], ends[k + 1]);
+            StageResult {
+                speed: st.speed,
+                window_steps: w,
+                liggghts: stage(&ls, w),
+                native: stage(&ns, w),
+            }
+        })
+        .collect();
+    let stab = stability(&case);
+    let seed = summary.seeds.first();
+    let res = RunResult {
+        index: r.index,
+        id: r.id.clone(),
+        mu_r: r.mu_r,
+        eta_r: r.eta_r,
+        seed: r.seed,
+        input_hash: r.input_hash.clone(),
+        dt: case.dt,
+        dashpot_stable: stab.stable,
+        stability_s: stab.entries.first().map(|e| e.criterion).unwrap_or(0.0),
+        stages,
+        liggghts_wall_s: seed.and_then(|s| s.liggghts_wall_s),
+        native_wall_s: seed.and_then(|s| s.native_wall_s),
+        date_utc: crate::cli::utc_stamp(),
+    };
+    write_atomic(
+        &dir.join("result.json"),
+        serde_json::to_string_pretty(&res)?.as_bytes(),
+    )?;
+    Ok((res, true))
+}
+
+/// Every current result of the manifest, and the runs that have none.
+pub fn collect(m: &Manifest, sweep: &Path) -> (Vec<RunResult>, Vec<RunSpec>) {
+    let mut done = Vec::new();
+    let mut missing = Vec::new();
+    for r in &m.runs {
+        match current_result(sweep, r) {
+            Some(res) => done.push(res),
+            None => missing.push(r.clone()),
+        }
+    }
+    (done, missing)
+}
+
+/// `results.csv`: one row per run, stage and code.
+pub fn results_csv(results: &[RunResult]) -> String {
+    let mut s = String::from(
+        "index,id,mu_r,eta_r,seed,speed[m/s],code,mu[-],normal_stress[Pa],erot[J],dt[s],dashpot_stable,stability_S\n",
+    );
+    for r in results {
+        for st in &r.stages {
+            for (code, c) in [("liggghts", &st.liggghts), ("native", &st.native)] {
+                if let Some(c) = c {
+                    s += &format!(
+                        "{},{},{},{},{},{},{code},{:.17e},{:.17e},{:.17e},{},{},{}\n",
+                        r.index,
+                        r.id,
+                        r.mu_r,
+                        r.eta_r,
+                        r.seed,
+                        st.speed,
+                        c.mu,
+                        c.normal_stress,
+                        c.erot,
+                        r.dt,
+                        r.dashpot_stable,
+                        r.stability_s
+                    );
+                }
+            }
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn base() -> SweepBase {
+        SweepBase {
+            preset: "ci".into(),
+            rolling: "epsd".into(),
+            engine: Engine::Native,
+            speeds: None,
+            strain: Some(0.2),
+            dt_factor: 1.0,
+        }
+    }
+
+    #[test]
+    fn fnv_is_the_reference_function() {
+        // published FNV-1a 64 test vectors
+        assert_eq!(fnv1a(b""), 0xcbf29ce484222325);
+        assert_eq!(fnv1a(b"a"), 0xaf63dc4c8601ec8c);
+        assert_eq!(fnv1a(b"foobar"), 0x85944171f73967e8);
+    }
+
+    #[test]
+    fn plan_hashes_inputs_and_rejects_bad_values() {
+        let m = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
+        assert_eq!(m.runs.len(), 8);
+        assert_eq!(m.runs[3].id, "mur0_etar0.25_s2");
+        let mut hashes: Vec<&str> = m.runs.iter().map(|r| r.input_hash.as_str()).collect();
+        hashes.sort();
+        hashes.dedup();
+        assert_eq!(hashes.len(), 8, "every run has its own inputs");
+        // the same plan hashes the same; another strain changes every hash
+        let again = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
+        assert_eq!(again, m);
+        let mut b = base();
+        b.strain = Some(0.3);
+        let other = Manifest::plan(b, &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
+        assert!(other
+            .runs
+            .iter()
+            .zip(&m.runs)
+            .all(|(a, b)| a.input_hash != b.input_hash));
+        let e = Manifest::plan(base(), &[-0.5], &[0.0], 1, "t".into()).unwrap_err();
+        assert!(e.to_string().contains("--mu-r"), "{e}");
+        let e = Manifest::plan(base(), &[0.5, 0.5], &[0.0], 1, "t".into()).unwrap_err();
+        assert!(e.to_string().contains("distinct"), "{e}");
+        let e = Manifest::plan(base(), &[0.5], &[0.0], 0, "t".into()).unwrap_err();
+        assert!(e.to_string().contains("--seeds"), "{e}");
+        assert!(m.run(8).is_err());
+        // more seeds extend a sweep; other shared settings do not
+        let more = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 3, "t".into()).unwrap();
+        assert!(more.compatible_with(&m) && m.compatible_with(&more));
+        assert!(!other.compatible_with(&m));
+    }
+}

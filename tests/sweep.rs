@@ -1,0 +1,267 @@
+//! `verify sweep` end to end: the reduced sweep (ci preset, 2 x 2 parameters, 2 seeds) locally
+//! with both codes, resumption, and the same sweep through a real local SLURM (job array,
+//! `run-one`, `collect`), whose results must equal the local ones bit for bit.
+
+mod common;
+
+use common::verify;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+const REDUCED: [&str; 10] = [
+    "--preset", "ci", "--mu-r", "0,1", "--eta-r", "0,0.5", "--seeds", "2", "--strain", "0.5",
+];
+
+fn sweep(extra: &[&str]) -> Output {
+    let mut args = vec!["sweep"];
+    args.extend_from_slice(&REDUCED);
+    args.extend_from_slice(extra);
+    verify(&args)
+}
+
+/// (id, code) -> mu from results.csv.
+fn results(dir: &Path) -> Vec<(String, String, f64, f64)> {
+    let mut r = csv::Reader::from_path(dir.join("results.csv")).unwrap();
+    r.records()
+        .map(|rec| {
+            let rec = rec.unwrap();
+            (
+                rec[1].to_string(),
+                rec[6].to_string(),
+                rec[7].parse().unwrap(),
+                rec[8].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn reduced_sweep_runs_both_codes_resumes_and_reports() {
+    common::liggghts();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep");
+    let o = sweep(&[
+        "--engine",
+        "both",
+        "--jobs",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
+    let runs = m["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 8);
+    let mut hashes: Vec<&str> = runs
+        .iter()
+        .map(|r| r["input_hash"].as_str().unwrap())
+        .collect();
+    hashes.sort();
+    hashes.dedup();
+    assert_eq!(hashes.len(), 8);
+    let res = results(&out);
+    assert_eq!(res.len(), 16, "8 runs x 2 codes");
+    for (id, code, mu, stress) in &res {
+        assert!((0.05..0.9).contains(mu), "{id} {code}: mu {mu}");
+        assert!(
+            (stress / 1e7 - 1.0).abs() < 0.05,
+            "{id} {code}: {stress} Pa"
+        );
+    }
+    // the codes agree on the sweep's mean friction
+    let mean = |c: &str| {
+        let v: Vec<f64> = res.iter().filter(|r| r.1 == c).map(|r| r.2).collect();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    assert!(
+        (mean("liggghts") - mean("native")).abs() < 0.05,
+        "{} vs {}",
+        mean("liggghts"),
+        mean("native")
+    );
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("conclusions, checked"));
+    for f in [
+        "figures/mu_vs_mur_stage0.svg",
+        "figures/heat_native_stage0.svg",
+        "figures/heat_liggghts_stage0.svg",
+        "report.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        rep["conclusions"].as_array().unwrap().len(),
+        2,
+        "one set per code"
+    );
+    // mu_r = 1 with eta_r = 0.5 at the paper's dt is flagged unstable in every result
+    assert!(rep["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["mu_r"] == 1.0 && p["eta_r"] == 0.5)
+        .all(|p| p["dashpot_stable"] == false));
+
+    // resume: nothing to run; a lost result is run again, alone
+    let o = sweep(&["--engine", "both", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        text(&o).contains("8 runs already have a current result"),
+        "{}",
+        text(&o)
+    );
+    std::fs::remove_file(out.join("runs/mur1_etar0_s2/result.json")).unwrap();
+    let o = sweep(&["--engine", "both", "--out", out.to_str().unwrap()]);
+    assert!(
+        text(&o).contains("7 runs already have a current result"),
+        "{}",
+        text(&o)
+    );
+    assert!(text(&o).contains("ran 1 runs"), "{}", text(&o));
+    assert_eq!(
+        results(&out),
+        res,
+        "the rerun reproduces the lost result exactly"
+    );
+
+    // another plan into the same directory is refused
+    let o = verify(&[
+        "sweep",
+        "--preset",
+        "ci",
+        "--mu-r",
+        "0.25",
+        "--eta-r",
+        "0",
+        "--seeds",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("different manifest"), "{}", text(&o));
+}
+
+/// Stops the local SLURM however the test ends.
+struct Slurm(std::path::PathBuf);
+
+impl Drop for Slurm {
+    fn drop(&mut self) {
+        let _ = Command::new("bash")
+            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
+            .arg("stop")
+            .arg(&self.0)
+            .status();
+    }
+}
+
+#[test]
+fn reduced_sweep_through_a_local_slurm_equals_the_local_run() {
+    let dir = tempfile::tempdir().unwrap();
+    // local reference: native, two at a time
+    let local = dir.path().join("local");
+    let o = sweep(&[
+        "--engine",
+        "native",
+        "--jobs",
+        "2",
+        "--out",
+        local.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+
+    let state = dir.path().join("slurm");
+    let start = Command::new("bash")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
+        .arg("start")
+        .arg(&state)
+        .output()
+        .unwrap();
+    let _guard = Slurm(state.clone());
+    assert!(
+        start.status.success(),
+        "a local SLURM could not be started (needs root and slurmctld, slurmd, slurm-client, \
+         munge; CI installs them):\n{}",
+        text(&start)
+    );
+    let cluster = dir.path().join("cluster");
+    let o = sweep(&[
+        "--engine",
+        "native",
+        "--out",
+        cluster.to_str().unwrap(),
+        "--emit",
+        "slurm",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let script = std::fs::read_to_string(cluster.join("sweep.sbatch")).unwrap();
+    assert!(script.contains("#SBATCH --array=0-7"), "{script}");
+    // collecting before the array ran names the missing runs
+    let o = verify(&["sweep", "collect", cluster.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        text(&o).contains("8 of 8 runs have no current result"),
+        "{}",
+        text(&o)
+    );
+    let sb = Command::new("sbatch")
+        .arg("--wait")
+        .arg(cluster.join("sweep.sbatch"))
+        .output()
+        .unwrap();
+    assert!(sb.status.success(), "sbatch: {}", text(&sb));
+    let o = verify(&["sweep", "collect", cluster.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(text(&o).contains("collected 8 of 8"), "{}", text(&o));
+    assert!(cluster.join("logs/run-7.log").is_file());
+    assert_eq!(
+        results(&cluster),
+        results(&local),
+        "the cluster's results equal the local ones bit for bit"
+    );
+    let o = verify(&["sweep", "report", cluster.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(cluster.join("report.html").is_file());
+}
+
+#[test]
+fn sweep_refuses_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s");
+    for (args, field) in [
+        (vec!["--mu-r=0.5,-1"], "--mu-r"),
+        (vec!["--eta-r", "nan"], "--eta-r"),
+        (vec!["--engine", "fortran"], "engine"),
+        (vec!["--jobs", "0"], "--jobs"),
+        (vec!["--emit", "pbs"], "scheduler"),
+        (vec!["--preset", "huge"], "preset"),
+        (vec!["--dt-factor", "2"], "--dt-factor"),
+    ] {
+        let mut a = vec!["sweep", "--seeds", "1", "--out", out.to_str().unwrap()];
+        a.extend(args);
+        let o = verify(&a);
+        assert_eq!(o.status.code(), Some(2), "{a:?}: {}", text(&o));
+        assert!(text(&o).contains(field), "{a:?}: {}", text(&o));
+    }
+    let o = verify(&[
+        "sweep",
+        "run-one",
+        "--manifest",
+        "/nonexistent/m.json",
+        "--index",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(text(&o).contains("/nonexistent/m.json"), "{}", text(&o));
+}
