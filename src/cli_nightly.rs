@@ -153,6 +153,9 @@ pub struct CodeStats {
     /// Mean rotational and translational kinetic energy over the steady window and seeds [J].
     pub erot: f64,
     pub ke: f64,
+    /// Mean fraction of touching particle pairs whose rolling resistance is at full
+    /// mobilisation over the steady window (native only; null for LIGGGHTS).
+    pub mobilised: f64,
     /// Wall time summed over seeds [s] and mean throughput [particle-steps/s].
     pub wall_s: f64,
     pub particle_steps_per_s: f64,
@@ -442,7 +445,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<
             .and_then(|v| v.into_iter().min());
     for (code, st) in [("liggghts", &s.liggghts), ("native", &s.native)] {
         let Some(st) = st else { continue };
-        let (mut erot, mut ke) = (0.0, 0.0);
+        let (mut erot, mut ke, mut mob) = (0.0, 0.0, 0.0);
         for r in &s.seeds {
             let csv = night
                 .join(&row.dir)
@@ -451,6 +454,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<
             let series = Series::read_csv(&csv)?;
             erot += series.window_mean("erot[J]", s.steady_window_steps);
             ke += series.window_mean("ke[J]", s.steady_window_steps);
+            mob += series.window_mean("mobilised[-]", s.steady_window_steps);
         }
         let n = s.seeds.len().max(1) as f64;
         let (wall, thr): (Vec<f64>, Vec<f64>) = s
@@ -468,6 +472,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<
             normal_stress: st.per_seed_stress.iter().sum::<f64>() / n,
             erot: erot / n,
             ke: ke / n,
+            mobilised: mob / n,
             wall_s: wall.iter().sum(),
             particle_steps_per_s: thr.iter().sum::<f64>() / thr.len().max(1) as f64,
         };
@@ -844,6 +849,14 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
                 (format!("{:.3}", c.normal_stress / 1e6), "num"),
                 (format!("{:.3e}", c.erot), "num"),
                 (format!("{:.3e}", c.ke), "num"),
+                (
+                    if c.mobilised.is_finite() {
+                        format!("{:.3}", c.mobilised)
+                    } else {
+                        "not output".into()
+                    },
+                    "num",
+                ),
                 (format!("{:.0}", c.wall_s), "num"),
             ]);
         }
@@ -856,6 +869,7 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
             "normal stress [MPa]",
             "mean E_rot [J]",
             "mean E_kin [J]",
+            "rolling mobilised",
             "wall [s]",
         ],
         &rows,
@@ -888,6 +902,10 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
         ("shear_force.svg", "shear force on the top plate"),
         ("top_force.svg", "normal force on the top plate"),
         ("kinetic_energy.svg", "rotational kinetic energy"),
+        (
+            "mobilised.svg",
+            "fraction of touching pairs at full rolling mobilisation (native)",
+        ),
     ] {
         if dir.join(f).is_file() {
             figs.push(p.svg_file(&dir.join(f), cap)?);

@@ -215,18 +215,21 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
     }
     let s = Series::read_csv(&dir.join(format!("{code}.csv"))).ok()?;
     let col = |h: &str| s.col(h);
-    let cols: Vec<usize> = crate::shear::ROW_COLUMNS
-        .iter()
-        .map(|h| col(h))
-        .collect::<Option<_>>()?;
+    // results stored before the mobilised column existed read it as NaN
+    let cols: Vec<Option<usize>> = crate::shear::ROW_COLUMNS.iter().map(|h| col(h)).collect();
+    if cols[..9].iter().any(Option::is_none) {
+        return None;
+    }
     let rows: Vec<Row> = s
         .steps
         .iter()
         .zip(&s.rows)
         .map(|(st, r)| {
-            let mut v = [0.0; 9];
-            for (k, &c) in cols.iter().enumerate() {
-                v[k] = r[c];
+            let mut v = [f64::NAN; 10];
+            for (k, c) in cols.iter().enumerate() {
+                if let Some(c) = c {
+                    v[k] = r[*c];
+                }
             }
             (*st, v)
         })
@@ -804,6 +807,14 @@ fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
             "shear strain",
             "top_f_x[N]",
             "Fx [N]",
+        ),
+        (
+            "mobilised.svg",
+            "rolling contacts at full mobilisation (native; not in LIGGGHTS' output)",
+            "strain[-]",
+            "shear strain",
+            "mobilised[-]",
+            "fraction of touching pairs",
         ),
         (
             "height.svg",

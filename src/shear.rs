@@ -16,10 +16,10 @@ use std::time::Instant;
 
 /// One output row of either code: step, top force (3), bottom force (3), top plate y,
 /// translational and rotational kinetic energy.
-pub type Row = (u64, [f64; 9]);
+pub type Row = (u64, [f64; 10]);
 
 /// Series columns holding a [`Row`]'s values, in the row's order.
-pub const ROW_COLUMNS: [&str; 9] = [
+pub const ROW_COLUMNS: [&str; 10] = [
     "top_f_x[N]",
     "top_f_y[N]",
     "top_f_z[N]",
@@ -29,6 +29,8 @@ pub const ROW_COLUMNS: [&str; 9] = [
     "top_y[m]",
     "ke[J]",
     "erot[J]",
+    // native only (LIGGGHTS: NaN): see `PlateRecord::mobilised`
+    "mobilised[-]",
 ];
 
 /// Result of one code's run.
@@ -114,6 +116,7 @@ pub fn run_native(
                 r.top_y,
                 r.ke,
                 r.erot,
+                r.mobilised,
             ],
         )
     };
@@ -199,7 +202,22 @@ pub fn run_liggghts(
                 tail: String::new(),
             });
         }
-        rows.push((step, [v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]]));
+        // the mobilised fraction is not in LIGGGHTS' thermo output
+        rows.push((
+            step,
+            [
+                v[0],
+                v[1],
+                v[2],
+                v[3],
+                v[4],
+                v[5],
+                v[6],
+                v[7],
+                v[8],
+                f64::NAN,
+            ],
+        ));
     }
     if rows.last().map(|r| r.0) != Some(case.total_steps()) {
         return Err(Error::LiggghtsFailed {
@@ -260,6 +278,7 @@ pub fn shear_series(case: &ShearCase, rows: &[Row]) -> Series {
             mu,
             v[7],
             v[8],
+            v[9],
         ]);
     }
     s

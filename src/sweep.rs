@@ -109,9 +109,10 @@ impl Manifest {
             return Err(Error::invalid("--seeds", seeds, "1 ..= 1000"));
         }
         let mut runs = Vec::new();
-        for &m in mu_r {
-            for &e in eta_r {
-                for seed in 1..=seeds {
+        // seed-major: a partly finished sweep already covers the whole map with its first seeds
+        for seed in 1..=seeds {
+            for &m in mu_r {
+                for &e in eta_r {
                     let index = runs.len();
                     let mut r = RunSpec {
                         index,
@@ -223,6 +224,9 @@ pub struct CodeStage {
     pub mu: f64,
     pub normal_stress: f64,
     pub erot: f64,
+    /// Fraction of touching pairs at full rolling mobilisation (native; NaN for LIGGGHTS).
+    #[serde(default)]
+    pub mobilised: Option<f64>,
 }
 
 /// Steady figures of one shear stage.
@@ -306,6 +310,7 @@ pub fn run_one(
             mu: s.window_mean("mu[-]", w),
             normal_stress: s.window_mean("top_f_y[N]", w) / area,
             erot: s.window_mean("erot[J]", w),
+            mobilised: Some(s.window_mean("mobilised[-]", w)).filter(|m| m.is_finite()),
         })
     };
     let stages = case
@@ -417,7 +422,8 @@ mod tests {
     fn plan_hashes_inputs_and_rejects_bad_values() {
         let m = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
         assert_eq!(m.runs.len(), 8);
-        assert_eq!(m.runs[3].id, "mur0_etar0.25_s2");
+        assert_eq!(m.runs[3].id, "mur0.5_etar0.25_s1");
+        assert_eq!(m.runs[4].id, "mur0_etar0_s2");
         let mut hashes: Vec<&str> = m.runs.iter().map(|r| r.input_hash.as_str()).collect();
         hashes.sort();
         hashes.dedup();

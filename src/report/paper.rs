@@ -424,6 +424,7 @@ mod tests {
                         mu,
                         normal_stress: 1e7,
                         erot: 1e-6,
+                        mobilised: Some(0.2),
                     }),
                 })
                 .collect(),

@@ -127,6 +127,10 @@ pub struct ContactOutcome {
     /// is at its limit); the dashpot torque on i is `-C_r P (w_i - w_j)`, P the projector
     /// onto the tangent plane (identity with torsionTorque).
     pub implicit_damping: f64,
+    /// The rolling resistance is at full mobilisation: the spring at its limit
+    /// `|M| = mu_r R* |Fn|` (epsd, epsd2, epsd3; the epsd dashpot is then off), or any rolling
+    /// contact with cdt (no spring, always at the limit).
+    pub rolling_mobilised: bool,
 }
 
 /// Evaluates one touching contact: `ContactModel::surfacesIntersect` for
@@ -153,8 +157,8 @@ pub fn surfaces_intersect(
         &mut fj,
     );
     let mut implicit_damping = 0.0;
-    let r_torque = match p.rolling {
-        RollingModel::Off => [0.0; 3],
+    let (r_torque, rolling_mobilised) = match p.rolling {
+        RollingModel::Off => ([0.0; 3], false),
         RollingModel::Cdt => rolling::cdt::torque(cd, &nf, p),
         RollingModel::Epsd => rolling::epsd::torque(cd, &nf, p, &mut hist.r_torque, update_history),
         RollingModel::Epsd2 => {
@@ -164,9 +168,10 @@ pub fn surfaces_intersect(
             rolling::epsd3::torque(cd, &nf, p, &mut hist.r_torque, update_history)
         }
         RollingModel::EpsdImplicit => {
-            let (m, c) = rolling::epsd::spring_only(cd, &nf, p, &mut hist.r_torque, update_history);
+            let (m, c, capped) =
+                rolling::epsd::spring_only(cd, &nf, p, &mut hist.r_torque, update_history);
             implicit_damping = c;
-            m
+            (m, capped)
         }
     };
     if p.rolling != RollingModel::Off {
@@ -180,6 +185,7 @@ pub fn surfaces_intersect(
             ft,
             r_torque,
             implicit_damping,
+            rolling_mobilised,
         },
     )
 }

@@ -43,6 +43,16 @@ fn image_shift(k: u8, lx: f64, lz: f64) -> V3 {
     [ix * lx, 0.0, iz * lz]
 }
 
+/// Per pair, from the force loop: the implicit dashpot's coefficient and contact normal, and
+/// the contact state (0 apart, 1 touching, 2 touching with the rolling resistance at full
+/// mobilisation).
+#[derive(Clone, Copy, Debug, Default)]
+struct PairAux {
+    damping: f64,
+    en: V3,
+    contact: u8,
+}
+
 /// One output record (SI units).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PlateRecord {
@@ -58,6 +68,9 @@ pub struct PlateRecord {
     /// Translational and rotational kinetic energy [J].
     pub ke: f64,
     pub erot: f64,
+    /// Fraction of touching particle-particle contacts whose rolling resistance is at full
+    /// mobilisation (NaN without touching pairs; 0 without a rolling model).
+    pub mobilised: f64,
 }
 
 /// Particle state for snapshots.
@@ -90,7 +103,10 @@ pub struct ShearSim {
     xhold: Vec<[f64; 3]>,
     pair_force: Vec<(ForceData, ForceData)>,
     /// epsd_implicit: per pair the dashpot coefficient and contact normal.
-    pair_damp: Vec<(f64, V3)>,
+    pair_damp: Vec<PairAux>,
+    /// DEM_DEBUG_WALL set: print every particle-triangle contact (read once: an environment
+    /// lookup per contact cost several per cent of the step).
+    debug_wall: bool,
     /// epsd_implicit: per particle `A = sum C P` (symmetric: xx yy zz xy xz yz) and
     /// `B = sum C P w_j` of its rolling dashpots, for the implicit final half-kick.
     imp: Vec<([f64; 6], V3)>,
@@ -159,6 +175,7 @@ impl ShearSim {
             xhold: packing.position.clone(),
             pair_force: Vec::new(),
             pair_damp: Vec::new(),
+            debug_wall: std::env::var_os("DEM_DEBUG_WALL").is_some(),
             imp: vec![([0.0; 6], [0.0; 3]); n],
             implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
             wall: vec![WallSlots::default(); n],
@@ -216,7 +233,14 @@ impl ShearSim {
                     * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
             })
             .sum();
+        let (touching, mobilised) = self.pair_damp.iter().fold((0usize, 0usize), |(t, m), a| {
+            (
+                t + usize::from(a.contact > 0),
+                m + usize::from(a.contact == 2),
+            )
+        });
         PlateRecord {
+            mobilised: mobilised as f64 / touching as f64,
             step: self.step,
             top_force: self.top_force,
             bottom_force: self.bottom_force,
@@ -358,7 +382,8 @@ impl ShearSim {
         self.top_hold = self.top.base_y;
         self.pair_force
             .resize(self.nl.pairs.len(), Default::default());
-        self.pair_damp.resize(self.nl.pairs.len(), (0.0, [0.0; 3]));
+        self.pair_damp
+            .resize(self.nl.pairs.len(), PairAux::default());
     }
 
     /// Per particle, the (mesh, triangle, image) within reach until the next rebuild: the
@@ -426,7 +451,7 @@ impl ShearSim {
                 let radsum = radius[i] + radius[j];
                 if rsq >= radsum * radsum {
                     *out = Default::default();
-                    *damp = (0.0, [0.0; 3]);
+                    *damp = PairAux::default();
                     return;
                 }
                 let mut cd = ContactData::pair(
@@ -441,13 +466,18 @@ impl ShearSim {
                 );
                 let (fi, fj, o) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
                 *out = (fi, fj);
-                *damp = (o.implicit_damping, cd.en);
+                *damp = PairAux {
+                    damping: o.implicit_damping,
+                    en: cd.en,
+                    contact: if o.rolling_mobilised { 2 } else { 1 },
+                };
             });
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
         let pf = &self.pair_force;
         let pd = &self.pair_damp;
         let implicit = self.implicit;
+        let debug_wall = self.debug_wall;
         let torsion = params.torsion_torque;
         let meshes = &self.meshes;
         let (cand, cstart) = (&self.wall_cand, &self.wall_start);
@@ -467,7 +497,9 @@ impl ShearSim {
                 *imp = ([0.0; 6], [0.0; 3]);
                 if implicit {
                     for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
-                        let (c, n) = pd[k as usize];
+                        let PairAux {
+                            damping: c, en: n, ..
+                        } = pd[k as usize];
                         if c == 0.0 {
                             continue;
                         }
@@ -578,7 +610,7 @@ impl ShearSim {
                             omega_i: omega[q],
                             ..Default::default()
                         };
-                        if std::env::var_os("DEM_DEBUG_WALL").is_some() {
+                        if debug_wall {
                             eprintln!(
                                 "wall p {} mesh {m} tri {tri} img {img} face {} d {:e}",
                                 q + 1,

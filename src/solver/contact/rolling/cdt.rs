@@ -11,13 +11,15 @@ use crate::solver::vec3::V3;
 /// `kn deltan`, not `Fn`. The header associates differently for pairs,
 /// `w * (mu_r kn deltan reff / |w|)`, and walls, `mu_r Fn w_k / |w| reff`; both mirrored.
 /// Without `torsionTorque` the normal component of `M` is removed afterwards.
-pub fn torque(cd: &ContactData, nf: &NormalForce, p: &PairParams) -> V3 {
+/// The torque, and whether it is at full mobilisation: cdt has no spring, so any rolling
+/// contact (nonzero relative rotation) is at its limit.
+pub fn torque(cd: &ContactData, nf: &NormalForce, p: &PairParams) -> (V3, bool) {
     let rmu = p.coeff_roll_frict;
     let reff = reff(cd);
     let w = relative_rotation(cd);
     let wmag = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
     if wmag <= 0.0 {
-        return [0.0; 3];
+        return ([0.0; 3], false);
     }
     let mut r = if cd.is_wall {
         let fn_ = cd.deltan * nf.kn;
@@ -35,7 +37,8 @@ pub fn torque(cd: &ContactData, nf: &NormalForce, p: &PairParams) -> V3 {
         let d = r[0] * enx + r[1] * eny + r[2] * enz;
         r = [r[0] - enx * d, r[1] - eny * d, r[2] - enz * d];
     }
-    r
+    let rolling = r != [0.0; 3];
+    (r, rolling)
 }
 
 #[cfg(test)]
@@ -53,13 +56,15 @@ mod tests {
         let mut cd = pair([0.0, 100.0, 0.0]);
         default_surface(&mut cd);
         let nf = hertz(&cd, &p);
-        let m = torque(&cd, &nf, &p);
+        let (m, mobilised) = torque(&cd, &nf, &p);
+        assert!(mobilised, "cdt is always at its limit while rolling");
         assert_relative_eq!(m[1], 0.5 * nf.kn * cd.deltan * 0.5e-3, max_relative = 1e-14);
         assert_eq!(m[0], 0.0);
         // a pure twist about the normal gives nothing without torsionTorque
         let mut cd = pair([0.0, 0.0, 100.0]);
         default_surface(&mut cd);
-        let m = torque(&cd, &nf, &p);
+        let (m, mobilised) = torque(&cd, &nf, &p);
+        assert!(!mobilised);
         assert_eq!(m, [0.0; 3]);
     }
 }

@@ -16,22 +16,23 @@ pub fn torque(
     p: &PairParams,
     hist: &mut V3,
     update_history: bool,
-) -> V3 {
+) -> (V3, bool) {
     let rmu = p.coeff_roll_frict;
     spring_dashpot(cd, nf, p, hist, update_history, |kn, reff| {
         2.25 * kn * rmu * rmu * reff * reff
     })
 }
 
-/// epsd_implicit: epsd's spring (history, limit) without the dashpot, and the dashpot
-/// coefficient `C_r = eta_r 2 sqrt(I_r k_r)` (0 at the limit) for the implicit integrator.
+/// epsd_implicit: epsd's spring (history, limit) without the dashpot, the dashpot
+/// coefficient `C_r = eta_r 2 sqrt(I_r k_r)` (0 at the limit) for the implicit integrator, and
+/// whether the spring is at its limit.
 pub fn spring_only(
     cd: &ContactData,
     nf: &NormalForce,
     p: &PairParams,
     hist: &mut V3,
     update_history: bool,
-) -> (V3, f64) {
+) -> (V3, f64, bool) {
     let reff = super::reff(cd);
     let r_inertia = super::rolling_inertia(cd, reff);
     let wr_tot = super::tangential_part(super::relative_rotation(cd), cd.en, p.torsion_torque);
@@ -47,7 +48,7 @@ pub fn spring_only(
     } else {
         p.coeff_roll_visc * 2.0 * (r_inertia * kr).sqrt()
     };
-    (m, c)
+    (m, c, capped)
 }
 
 #[cfg(test)]
@@ -70,11 +71,13 @@ mod tests {
         let i_r = 1.4 * (cd.mi * 1e-6) * (cd.mj * 1e-6) / (cd.mi * 1e-6 + cd.mj * 1e-6);
         let c_r = 0.3 * 2.0 * (i_r * kr).sqrt();
         let mut hist = [0.0; 3];
-        let m = torque(&cd, &nf, &p, &mut hist, true);
+        let (m, mobilised) = torque(&cd, &nf, &p, &mut hist, true);
+        assert!(!mobilised);
         assert_relative_eq!(hist[1], kr * 1e-8 * 100.0, max_relative = 1e-14);
         assert_relative_eq!(m[1], kr * 1e-8 * 100.0 + c_r * 100.0, max_relative = 1e-14);
         let mut hist = [0.0, 1.0, 0.0];
-        let m = torque(&cd, &nf, &p, &mut hist, true);
+        let (m, mobilised) = torque(&cd, &nf, &p, &mut hist, true);
+        assert!(mobilised);
         let cap = nf.fn_ * reff * 0.5;
         assert_relative_eq!(m[1], cap, max_relative = 1e-14);
         assert_relative_eq!(hist[1], cap, max_relative = 1e-14);

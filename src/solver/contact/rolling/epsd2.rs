@@ -14,16 +14,16 @@ pub fn torque(
     p: &PairParams,
     hist: &mut V3,
     update_history: bool,
-) -> V3 {
+) -> (V3, bool) {
     let reff = reff(cd);
     let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
     let kr = nf.kt * reff * reff;
     let m_max = nf.fn_.abs() * reff * p.coeff_roll_frict;
-    let (m, _) = spring(*hist, wr_tot, kr, p.dt, m_max);
+    let (m, capped) = spring(*hist, wr_tot, kr, p.dt, m_max);
     if update_history {
         *hist = m;
     }
-    m
+    (m, capped)
 }
 
 #[cfg(test)]
@@ -42,7 +42,8 @@ mod tests {
         default_surface(&mut cd);
         let nf = hertz(&cd, &p);
         let mut hist = [0.0; 3];
-        let m = torque(&cd, &nf, &p, &mut hist, true);
+        let (m, mobilised) = torque(&cd, &nf, &p, &mut hist, true);
+        assert!(!mobilised);
         assert_relative_eq!(m[0], nf.kt * 0.25e-6 * 1e-8 * 100.0, max_relative = 1e-14);
         assert_eq!(m, hist);
     }

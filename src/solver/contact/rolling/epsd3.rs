@@ -15,7 +15,7 @@ pub fn torque(
     p: &PairParams,
     hist: &mut V3,
     update_history: bool,
-) -> V3 {
+) -> (V3, bool) {
     let rmu = p.coeff_roll_frict;
     spring_dashpot(cd, nf, p, hist, update_history, |kn, reff| {
         p.coeff_roll_stiffness * kn * rmu * rmu * reff * reff
@@ -39,7 +39,8 @@ mod tests {
         default_surface(&mut cd);
         let nf = hertz(&cd, &p);
         let mut hist = [0.0; 3];
-        let m = torque(&cd, &nf, &p, &mut hist, true);
+        let (m, mobilised) = torque(&cd, &nf, &p, &mut hist, true);
+        assert!(!mobilised);
         let kr = 3.0 * nf.kn * 0.25 * 0.25e-6;
         assert_relative_eq!(m[1], kr * 1e-8 * 100.0, max_relative = 1e-14);
     }

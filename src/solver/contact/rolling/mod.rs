@@ -98,7 +98,7 @@ pub fn spring_dashpot(
     hist: &mut V3,
     update_history: bool,
     kr: impl Fn(f64, f64) -> f64,
-) -> V3 {
+) -> (V3, bool) {
     let reff = reff(cd);
     let r_inertia = rolling_inertia(cd, reff);
     let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
@@ -114,5 +114,5 @@ pub fn spring_dashpot(
             m[k] += r_coef * wr_tot[k];
         }
     }
-    m
+    (m, capped)
 }
