@@ -87,6 +87,10 @@ pub struct PlanArgs {
     /// Runs at a time (each uses one core per code).
     #[arg(long, default_value_t = 1)]
     pub jobs: usize,
+    /// Native solver threads per run (default: every core with one job of the native engine,
+    /// else 1).
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Write a scheduler script for the manifest instead of running: `slurm`.
     #[arg(long)]
     pub emit: Option<String>,
@@ -326,10 +330,11 @@ fn plan_and_run(p: PlanArgs) -> Result<Outcome> {
     let cores = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1);
-    let threads = if p.jobs == 1 && m.base.engine == Engine::Native {
-        cores
-    } else {
-        1
+    let threads = match p.threads {
+        Some(0) => return Err(Error::invalid("--threads", 0, ">= 1")),
+        Some(t) => t,
+        None if p.jobs == 1 && m.base.engine == Engine::Native => cores,
+        None => 1,
     };
     let bar = ProgressBar::new(m.runs.len() as u64).with_position(done.len() as u64);
     bar.set_style(

@@ -124,8 +124,8 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
         "self-contained: no network resources"
     );
     let expected = body_attr(&html, "data-plots-expected").unwrap();
-    // 1 bar chart + 2 trend plots + 4 per shear case + 2 per contact run
-    assert_eq!(expected, 1 + 2 + 5 * 4 + 23 * 2);
+    // 1 bar chart + 2 trend plots + 5 per shear case + 2 per contact run
+    assert_eq!(expected, 1 + 2 + 5 * 5 + 23 * 2);
     let dom = browse(&root.join("profile-dom"), &report, &["--dump-dom"]);
     assert!(dom.status.success(), "{}", text(&dom));
     let dom_text = String::from_utf8_lossy(&dom.stdout);
