@@ -599,6 +599,16 @@ fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<String> 
     for e in &s.errors {
         p.html(&format!("<p class=\"fail\">{}</p>", escape(e)));
     }
+    let c_ok = s.contact.iter().filter(|c| c.pass).count();
+    let c_bit = s.contact.iter().filter(|c| c.max_rel_err == 0.0).count();
+    let s_ok = s.shear.iter().filter(|r| r.pass).count();
+    let dmu_max = s.shear.iter().filter_map(|r| r.dmu).fold(0.0, f64::max);
+    p.html(&format!(
+        "<p style=\"font-size:18px\">Contact laws: <b>{c_ok}/{}</b> runs agree ({c_bit} bit for bit). \
+         Shear box: <b>{s_ok}/{}</b> cases agree; largest |Δμ| between the codes {dmu_max:.3}.</p>",
+        s.contact.len(),
+        s.shear.len()
+    ));
 
     // overview
     p.heading("overview", "Overview");
