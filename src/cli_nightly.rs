@@ -669,6 +669,7 @@ fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<String> 
             (
                 match &r.error {
                     Some(e) => escape(e),
+                    None if r.max_rel_err == 0.0 => "bit for bit in every channel".into(),
                     None => format!(
                         "max rel err {} ({})",
                         sci(r.max_rel_err),
