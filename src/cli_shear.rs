@@ -44,17 +44,8 @@ pub struct ShearArgs {
     /// No progress bars (callers with a progress display of their own, e.g. a sweep).
     #[arg(skip)]
     pub hide_progress: bool,
-    /// Shear speeds [m/s], comma separated (replaces the preset's stages).
-    #[arg(long, value_delimiter = ',')]
-    pub speeds: Option<Vec<f64>>,
-    /// Shear strain of each stage (replaces the preset's).
-    #[arg(long)]
-    pub strain: Option<f64>,
-    /// Time step as a multiple of the preset's (compression steps and output interval scale
-    /// with 1 / factor, so the same physical time and strain are covered): runs a case at a
-    /// converged dt, e.g. 0.25.
-    #[arg(long, default_value_t = 1.0)]
-    pub dt_factor: f64,
+    #[command(flatten)]
+    pub protocol: Protocol,
     /// Threads of the native solver (default: all cores, minus one while LIGGGHTS runs).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -105,6 +96,23 @@ pub struct ShearArgs {
     pub timeout: u64,
 }
 
+/// Changes to a preset's shear protocol, shared by `verify shear` and `verify sweep`.
+#[derive(Args, Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Protocol {
+    /// Shear speeds [m/s], comma separated: stages in sequence, as in the paper (replaces the
+    /// preset's stages).
+    #[arg(long, value_delimiter = ',')]
+    pub speeds: Option<Vec<f64>>,
+    /// Shear strain of each stage (replaces the preset's).
+    #[arg(long)]
+    pub strain: Option<f64>,
+    /// Time step as a multiple of the preset's (compression steps and output interval scale
+    /// with 1 / factor, so the same physical time and strain are covered): runs a case at a
+    /// converged dt, e.g. 0.25.
+    #[arg(long, default_value_t = 1.0)]
+    pub dt_factor: f64,
+}
+
 impl ShearArgs {
     /// The command line's defaults (what `verify shear` without options uses).
     pub fn defaults() -> Self {
@@ -136,13 +144,14 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
         return Err(Error::invalid("--mu-r", a.mu_r, "0 with --rolling off"));
     }
     let mut c = ShearCase::preset(&a.preset, rolling, a.mu_r, a.eta_r, seed)?;
-    if let Some(speeds) = &a.speeds {
-        let strain = a.strain.unwrap_or(c.stages[0].strain);
+    let pr = &a.protocol;
+    if let Some(speeds) = &pr.speeds {
+        let strain = pr.strain.unwrap_or(c.stages[0].strain);
         c.stages = speeds
             .iter()
             .map(|&speed| Stage { speed, strain })
             .collect();
-    } else if let Some(strain) = a.strain {
+    } else if let Some(strain) = pr.strain {
         for s in &mut c.stages {
             s.strain = strain;
         }
@@ -181,18 +190,15 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
         c.box_z = area / c.box_x;
         c.particles = n;
     }
-    if !(a.dt_factor.is_finite() && a.dt_factor > 0.0 && a.dt_factor <= 1.0) {
-        return Err(Error::invalid(
-            "--dt-factor",
-            a.dt_factor,
-            "a number in (0, 1]",
-        ));
+    let f = pr.dt_factor;
+    if !(f.is_finite() && f > 0.0 && f <= 1.0) {
+        return Err(Error::invalid("--dt-factor", f, "a number in (0, 1]"));
     }
-    if a.dt_factor != 1.0 {
-        c.dt *= a.dt_factor;
-        c.compression_steps = (c.compression_steps as f64 / a.dt_factor).round() as u64;
-        c.output_every = ((c.output_every as f64 / a.dt_factor).round() as u64).max(1);
-        c.snapshot_every = (c.snapshot_every as f64 / a.dt_factor).round() as u64;
+    if f != 1.0 {
+        c.dt *= f;
+        c.compression_steps = (c.compression_steps as f64 / f).round() as u64;
+        c.output_every = ((c.output_every as f64 / f).round() as u64).max(1);
+        c.snapshot_every = (c.snapshot_every as f64 / f).round() as u64;
     }
     let w = c.validate(a.allow_inertial)?;
     Ok((c, w))

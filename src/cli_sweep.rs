@@ -3,6 +3,7 @@
 //! `collect` gathers results, `report` draws the paper's figures and checks its conclusions.
 
 use crate::cli::{utc_stamp, Outcome};
+use crate::cli_shear::Protocol;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::report::bars::escape;
@@ -72,15 +73,8 @@ pub struct PlanArgs {
     /// Codes: native, liggghts, both.
     #[arg(long, default_value = "native")]
     pub engine: String,
-    /// Shear speeds [m/s] (stages in sequence, as in the paper), replacing the preset's.
-    #[arg(long, value_delimiter = ',')]
-    pub speeds: Option<Vec<f64>>,
-    /// Strain of each stage (replaces the preset's).
-    #[arg(long)]
-    pub strain: Option<f64>,
-    /// Time step as a multiple of the preset's (a converged-dt sweep: e.g. 0.25).
-    #[arg(long, default_value_t = 1.0)]
-    pub dt_factor: f64,
+    #[command(flatten)]
+    pub protocol: Protocol,
     /// Sweep directory (manifest, runs, results, report).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -115,7 +109,7 @@ pub fn sweep(a: SweepArgs) -> Result<Outcome> {
             let (res, ran) = run_one(&m, dir, index, threads)?;
             println!(
                 "run {index} ({}): {} in {:.1} s; {}",
-                res.id,
+                res.run.id,
                 if ran {
                     "done"
                 } else {
@@ -260,9 +254,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Outcome> {
         preset: p.preset.clone(),
         rolling: p.rolling.clone(),
         engine: Engine::parse(&p.engine)?,
-        speeds: p.speeds.clone(),
-        strain: p.strain,
-        dt_factor: p.dt_factor,
+        protocol: p.protocol.clone(),
     };
     let mut m = Manifest::plan(base, &p.mu_r, &p.eta_r, p.seeds, utc_stamp())?;
     let mpath = out.join("manifest.json");
@@ -298,7 +290,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Outcome> {
         p.preset,
         p.rolling,
         p.engine,
-        p.dt_factor,
+        p.protocol.dt_factor,
         mpath.display()
     );
     if p.emit.is_some() {
@@ -351,7 +343,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Outcome> {
                 let k = next.fetch_add(1, Ordering::SeqCst);
                 let Some(r) = pending.get(k) else { break };
                 match run_one(&m, &out, r.index, threads) {
-                    Ok((res, _)) => bar.println(format!("  {}: {}", res.id, stage_line(&res))),
+                    Ok((res, _)) => bar.println(format!("  {}: {}", res.run.id, stage_line(&res))),
                     Err(e) => {
                         let msg = format!("run {} ({}): {e}", r.index, r.id);
                         let _ = write_atomic(
@@ -475,7 +467,7 @@ pub fn report(dir: &Path, converged: Option<&Path>) -> Result<()> {
         escape(&m.base.preset),
         escape(&m.base.rolling),
         m.base.engine,
-        m.base.dt_factor,
+        m.base.protocol.dt_factor,
         escape(&m.created_utc),
         wall_n / 3600.0,
         wall_l / 3600.0,

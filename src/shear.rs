@@ -203,21 +203,9 @@ pub fn run_liggghts(
             });
         }
         // the mobilised fraction is not in LIGGGHTS' thermo output
-        rows.push((
-            step,
-            [
-                v[0],
-                v[1],
-                v[2],
-                v[3],
-                v[4],
-                v[5],
-                v[6],
-                v[7],
-                v[8],
-                f64::NAN,
-            ],
-        ));
+        let mut row = [f64::NAN; 10];
+        row[..9].copy_from_slice(&v[..9]);
+        rows.push((step, row));
     }
     if rows.last().map(|r| r.0) != Some(case.total_steps()) {
         return Err(Error::LiggghtsFailed {

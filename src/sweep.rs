@@ -6,7 +6,7 @@
 //! run again. The hash covers the full shear case of the seed (materials, box, protocol, dt,
 //! rolling model and coefficients), the engine and the crate version, as FNV-1a 64 of its JSON.
 
-use crate::cli_shear::{shear_case, shear_run, ShearArgs};
+use crate::cli_shear::{shear_case, shear_run, Protocol, ShearArgs};
 use crate::compare::steady_window;
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
@@ -54,12 +54,9 @@ pub struct SweepBase {
     pub preset: String,
     pub rolling: String,
     pub engine: Engine,
-    /// Shear speeds [m/s] replacing the preset's stages (None: the preset's).
-    pub speeds: Option<Vec<f64>>,
-    /// Strain of each stage (None: the preset's).
-    pub strain: Option<f64>,
-    /// Time step factor applied to the preset's dt (1: the preset's dt).
-    pub dt_factor: f64,
+    /// Speeds, strain per stage, dt factor (flattened: the manifest keeps them at top level).
+    #[serde(flatten)]
+    pub protocol: Protocol,
 }
 
 /// One run: a parameter point and a seed.
@@ -192,9 +189,7 @@ pub fn shear_args(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) -> 
         preset: base.preset.clone(),
         seeds: 1,
         first_seed: r.seed,
-        speeds: base.speeds.clone(),
-        strain: base.strain,
-        dt_factor: base.dt_factor,
+        protocol: base.protocol.clone(),
         threads: Some(threads),
         out: Some(dir.to_path_buf()),
         native_only: base.engine == Engine::Native,
@@ -241,12 +236,9 @@ pub struct StageResult {
 /// `runs/<id>/result.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
-    pub index: usize,
-    pub id: String,
-    pub mu_r: f64,
-    pub eta_r: f64,
-    pub seed: u64,
-    pub input_hash: String,
+    /// The manifest entry (flattened: index, id, mu_r, eta_r, seed, input_hash).
+    #[serde(flatten)]
+    pub run: RunSpec,
     pub dt: f64,
     /// Explicit rolling dashpot stable at this dt, and the worst criterion S (unstable >= 4).
     pub dashpot_stable: bool,
@@ -265,7 +257,7 @@ pub fn run_dir(sweep: &Path, r: &RunSpec) -> PathBuf {
 pub fn current_result(sweep: &Path, r: &RunSpec) -> Option<RunResult> {
     let text = std::fs::read_to_string(run_dir(sweep, r).join("result.json")).ok()?;
     let res: RunResult = serde_json::from_str(&text).ok()?;
-    (res.input_hash == r.input_hash).then_some(res)
+    (res.run.input_hash == r.input_hash).then_some(res)
 }
 
 /// Runs one entry of the manifest (unless its current result exists) and writes its result
@@ -330,12 +322,7 @@ pub fn run_one(
     let stab = stability(&case);
     let seed = summary.seeds.first();
     let res = RunResult {
-        index: r.index,
-        id: r.id.clone(),
-        mu_r: r.mu_r,
-        eta_r: r.eta_r,
-        seed: r.seed,
-        input_hash: r.input_hash.clone(),
+        run: r.clone(),
         dt: case.dt,
         dashpot_stable: stab.stable,
         stability_s: stab.entries.first().map(|e| e.criterion).unwrap_or(0.0),
@@ -375,11 +362,11 @@ pub fn results_csv(results: &[RunResult]) -> String {
                 if let Some(c) = c {
                     s += &format!(
                         "{},{},{},{},{},{},{code},{:.17e},{:.17e},{:.17e},{},{},{}\n",
-                        r.index,
-                        r.id,
-                        r.mu_r,
-                        r.eta_r,
-                        r.seed,
+                        r.run.index,
+                        r.run.id,
+                        r.run.mu_r,
+                        r.run.eta_r,
+                        r.run.seed,
                         st.speed,
                         c.mu,
                         c.normal_stress,
@@ -404,9 +391,11 @@ mod tests {
             preset: "ci".into(),
             rolling: "epsd".into(),
             engine: Engine::Native,
-            speeds: None,
-            strain: Some(0.2),
-            dt_factor: 1.0,
+            protocol: Protocol {
+                speeds: None,
+                strain: Some(0.2),
+                dt_factor: 1.0,
+            },
         }
     }
 
@@ -432,7 +421,7 @@ mod tests {
         let again = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
         assert_eq!(again, m);
         let mut b = base();
-        b.strain = Some(0.3);
+        b.protocol.strain = Some(0.3);
         let other = Manifest::plan(b, &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
         assert!(other
             .runs

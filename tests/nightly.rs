@@ -5,17 +5,10 @@
 
 mod common;
 
-use common::verify;
+use common::{text, verify};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
 
 /// Debian's chromium; the test fails (never skips) without it.
 fn chromium() -> PathBuf {

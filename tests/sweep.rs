@@ -4,17 +4,10 @@
 
 mod common;
 
-use common::verify;
+use common::{text, verify};
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
 
 const REDUCED: [&str; 10] = [
     "--preset", "ci", "--mu-r", "0,1", "--eta-r", "0,0.5", "--seeds", "2", "--strain", "0.5",

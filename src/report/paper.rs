@@ -33,7 +33,12 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
         for (k, st) in r.stages.iter().enumerate() {
             for (code, c) in [("liggghts", &st.liggghts), ("native", &st.native)] {
                 if c.is_some() {
-                    let key = (code.to_string(), r.mu_r.to_bits(), r.eta_r.to_bits(), k);
+                    let key = (
+                        code.to_string(),
+                        r.run.mu_r.to_bits(),
+                        r.run.eta_r.to_bits(),
+                        k,
+                    );
                     if !keys.contains(&key) {
                         keys.push(key);
                     }
@@ -45,7 +50,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
         let (mu_r, eta_r) = (f64::from_bits(m), f64::from_bits(e));
         let runs: Vec<&RunResult> = results
             .iter()
-            .filter(|r| r.mu_r == mu_r && r.eta_r == eta_r && r.stages.len() > k)
+            .filter(|r| r.run.mu_r == mu_r && r.run.eta_r == eta_r && r.stages.len() > k)
             .collect();
         let vals: Vec<(f64, f64)> = runs
             .iter()
@@ -404,12 +409,14 @@ mod tests {
 
     fn run(mu_r: f64, eta_r: f64, seed: u64, mus: &[f64]) -> RunResult {
         RunResult {
-            index: 0,
-            id: format!("{mu_r}_{eta_r}_{seed}"),
-            mu_r,
-            eta_r,
-            seed,
-            input_hash: String::new(),
+            run: crate::sweep::RunSpec {
+                index: 0,
+                id: format!("{mu_r}_{eta_r}_{seed}"),
+                mu_r,
+                eta_r,
+                seed,
+                input_hash: String::new(),
+            },
             dt: 1e-6,
             dashpot_stable: mu_r < 1.0,
             stability_s: 1.0,
@@ -474,13 +481,13 @@ mod tests {
         // a map where mu falls with mu_r at eta_r = 0 and rises everywhere else disagrees
         let mut r = paper_like();
         for x in &mut r {
-            if x.eta_r == 0.0 {
+            if x.run.eta_r == 0.0 {
                 for st in &mut x.stages {
-                    st.native.as_mut().unwrap().mu = 0.6 - 0.3 * x.mu_r;
+                    st.native.as_mut().unwrap().mu = 0.6 - 0.3 * x.run.mu_r;
                 }
             } else {
                 for st in &mut x.stages {
-                    st.native.as_mut().unwrap().mu = 0.3 + 0.3 * x.mu_r;
+                    st.native.as_mut().unwrap().mu = 0.3 + 0.3 * x.run.mu_r;
                 }
             }
         }

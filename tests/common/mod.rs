@@ -25,3 +25,12 @@ pub fn verify(args: &[&str]) -> std::process::Output {
         .output()
         .expect("run verify")
 }
+
+/// A finished command's stdout and stderr, for assertion messages.
+pub fn text(o: &std::process::Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
