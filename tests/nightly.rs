@@ -9,7 +9,6 @@ use common::{text, verify};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-
 /// Debian's chromium; the test fails (never skips) without it.
 fn chromium() -> PathBuf {
     for c in ["chromium", "chromium-browser", "google-chrome"] {

@@ -6,7 +6,6 @@ mod common;
 use common::{text, verify};
 use std::path::Path;
 
-
 fn summary(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }

@@ -8,7 +8,6 @@ use common::{text, verify};
 use std::path::Path;
 use std::process::{Command, Output};
 
-
 const REDUCED: [&str; 10] = [
     "--preset", "ci", "--mu-r", "0,1", "--eta-r", "0,0.5", "--seeds", "2", "--strain", "0.5",
 ];
