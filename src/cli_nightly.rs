@@ -886,8 +886,8 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
         &rows,
     ));
     p.para(&format!(
-        "Lockstep from a common compacted state: the codes agree (1e-6 of the peak, plate forces \
-         and position) for {} shear steps (shortest over seeds); chaos baseline (native vs native \
+        "Lockstep from a common compacted state: the codes agree (1e-6 of the peak: plate forces, \
+         top plate position, kinetic energies) for {} shear steps (shortest over seeds); chaos baseline (native vs native \
          one ulp apart): {} steps. Stability of the explicit rolling dashpot: {}{}.",
         r.lockstep_steps
             .map(|v| v.saturating_sub(1).to_string())

@@ -262,6 +262,10 @@ fn store(dir: &Path, code: &str, case: &ShearCase, run: &CodeRun) -> Result<Seri
     Ok(s)
 }
 
+/// Channels compared step by step: plate forces, top plate position, and the translational and
+/// rotational kinetic energies (LIGGGHTS: compute ke, compute erotate/sphere).
+pub const LOCKSTEP_CHANNELS: [&str; 5] = ["top_f", "bottom_f", "top_y", "ke", "erot"];
+
 /// Shear steps of the lockstep test from the compacted state.
 pub const LOCKSTEP_SHEAR_STEPS: u64 = 10_000;
 
@@ -328,7 +332,7 @@ fn cached_lockstep(case: &ShearCase, dir: &Path, steps: u64) -> Option<(Horizon,
         series(dir, "native")?,
         series(&dir.join("perturbed"), "native")?,
     );
-    let chans = ["top_f", "bottom_f", "top_y"];
+    let chans = LOCKSTEP_CHANNELS;
     Some((
         lockstep(&l, &n, &chans, LOCKSTEP_RTOL),
         lockstep(&n, &p, &chans, LOCKSTEP_RTOL),
@@ -555,12 +559,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             .map(|r| store(&dir, "native", case, r))
             .transpose()?;
         let horizon = match (&ls, &ns) {
-            (Some(l), Some(n)) => Some(lockstep(
-                l,
-                n,
-                &["top_f", "bottom_f", "top_y"],
-                LOCKSTEP_RTOL,
-            )),
+            (Some(l), Some(n)) => Some(lockstep(l, n, &LOCKSTEP_CHANNELS, LOCKSTEP_RTOL)),
             _ => None,
         };
         let ls_dir = dir.join("lockstep_shear");

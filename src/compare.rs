@@ -159,11 +159,36 @@ pub struct Horizon {
 /// Lockstep comparison of `channels` (vector channels by base name) over common steps,
 /// from the first step after 0 (LIGGGHTS' thermo at setup prints the mesh force of the
 /// previous step, zero at the start, not a computed value).
+///
+/// A name is a vector channel's base name (`top_f` for `top_f_x/y/z`) or a single column's
+/// name (`top_y`, `ke`); every name must exist (a misspelt channel would silently not be
+/// compared).
 pub fn lockstep(a: &Series, b: &Series, channels: &[&str], rtol: f64) -> Horizon {
-    let chans: Vec<_> = a
-        .channels()
-        .into_iter()
-        .filter(|c| channels.contains(&c.name.as_str()))
+    let all = a.channels();
+    let chans: Vec<crate::series::Channel> = channels
+        .iter()
+        .map(|&want| {
+            let vector = all.iter().find(|c| c.name == want && c.cols.len() > 1);
+            let column = a
+                .columns
+                .iter()
+                .position(|h| crate::series::split_header(h).0 == want);
+            match (vector, column) {
+                (Some(c), _) => c.clone(),
+                (None, Some(i)) => {
+                    let (name, unit) = crate::series::split_header(&a.columns[i]);
+                    crate::series::Channel {
+                        name: name.to_string(),
+                        unit: unit.to_string(),
+                        cols: vec![i],
+                    }
+                }
+                (None, None) => panic!(
+                    "lockstep channel `{want}` is not in the series (columns: {})",
+                    a.columns.join(", ")
+                ),
+            }
+        })
         .collect();
     let n = a.rows.len().min(b.rows.len());
     let peaks: Vec<f64> = chans
@@ -337,6 +362,21 @@ mod shear_tests {
         assert_eq!(h.first_diverge_step, Some(20));
         assert_eq!(h.first_diverge_channel.as_deref(), Some("top_f"));
         assert_eq!(lockstep(&a, &a, &["top_f"], 1e-6).first_diverge_step, None);
+        // a single column whose name ends in _y is compared by its own name, not dropped
+        let mut c = a.clone();
+        c.columns[1] = "top_y[m]".into();
+        let mut d = c.clone();
+        d.rows[3][1] = 11.0;
+        let h = lockstep(&c, &d, &["top_y", "mu"], 1e-6);
+        assert_eq!(h.first_diverge_step, Some(30));
+        assert_eq!(h.first_diverge_channel.as_deref(), Some("top_y"));
+    }
+
+    #[test]
+    #[should_panic(expected = "lockstep channel `top_g` is not in the series")]
+    fn misspelt_lockstep_channel_is_a_bug() {
+        let a = s(&[1.0, 2.0]);
+        lockstep(&a, &a, &["top_g"], 1e-6);
     }
 
     #[test]
