@@ -123,11 +123,12 @@ pub struct Conclusion {
     pub evidence: String,
 }
 
+/// The point's CI half-width; infinite with one seed (nothing is significant then).
 fn ci(p: &Point) -> f64 {
-    if p.mu_ci95.is_finite() {
-        p.mu_ci95
+    if p.mu_ci95.is_nan() {
+        f64::INFINITY
     } else {
-        0.0
+        p.mu_ci95
     }
 }
 
@@ -468,6 +469,18 @@ mod tests {
         assert!((q.mu - 0.454).abs() < 1e-12 && q.seeds == 3);
         assert!(q.mu_ci95 > 0.0 && q.mu_ci95 < 0.01);
         assert!(!p.iter().find(|p| p.mu_r == 1.0).unwrap().dashpot_stable);
+    }
+
+    #[test]
+    fn one_seed_resolves_nothing() {
+        let one: Vec<RunResult> = paper_like()
+            .into_iter()
+            .filter(|r| r.run.seed == 1)
+            .collect();
+        let c = conclusions(&aggregate(&one), "native");
+        assert_eq!(c[0].verdict, "not resolved", "{}", c[0].evidence);
+        assert_eq!(c[1].verdict, "not resolved", "{}", c[1].evidence);
+        assert_eq!(c[2].verdict, "not resolved", "{}", c[2].evidence);
     }
 
     #[test]
