@@ -5,6 +5,8 @@
 # so cron (MAILTO) or systemd (OnFailure=) can alert.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+# cron and systemd start with a minimal PATH: find cargo where rustup puts it
+export PATH="$HOME/.cargo/bin:/usr/local/cargo/bin:$PATH"
 root="${NIGHTLY_ROOT:-runs/nightly}"
 stamp="$(date -u +%Y%m%d-%H%M)"
 mkdir -p "$root"
