@@ -12,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
 use crate::series::Series;
 use crate::shear::run_ends;
+use crate::spec::shear::ShearCase;
 use crate::spec::stability_shear::stability;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -202,10 +203,15 @@ pub fn shear_args(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) -> 
 fn input_hash(base: &SweepBase, r: &RunSpec) -> Result<String> {
     let args = shear_args(base, r, Path::new("."), 1);
     let (case, _) = shear_case(&args, r.seed)?;
+    case_hash(&case, base.engine)
+}
+
+/// The input hash of a seed's case run by `engine`.
+fn case_hash(case: &ShearCase, engine: Engine) -> Result<String> {
     let text = format!(
         "{}|{:?}|{}",
-        serde_json::to_string(&case)?,
-        base.engine,
+        serde_json::to_string(case)?,
+        engine,
         env!("CARGO_PKG_VERSION")
     );
     Ok(format!("{:016x}", fnv1a(text.as_bytes())))
@@ -275,7 +281,7 @@ pub fn run_one(
     let dir = run_dir(sweep, r);
     let args = shear_args(&m.base, r, &dir, threads);
     let (case, _) = shear_case(&args, r.seed)?;
-    if input_hash(&m.base, r)? != r.input_hash {
+    if case_hash(&case, m.base.engine)? != r.input_hash {
         return Err(Error::invalid(
             "manifest",
             format!("run {} ({})", r.index, r.id),

@@ -2,32 +2,29 @@
 
 mod common;
 
-use std::process::Command;
+use common::verify;
 
 #[test]
 fn convergence_runs_and_reports_stability_per_dt() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = Command::new(common::verify_bin())
-        .args([
-            "convergence",
-            "--mu-r",
-            "1",
-            "--eta-r",
-            "0.5",
-            "--preset",
-            "ci",
-            "--seeds",
-            "1",
-            "--strain",
-            "0.1",
-            "--dt-factors",
-            "1,0.5",
-            "--out",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = verify(&[
+        "convergence",
+        "--mu-r",
+        "1",
+        "--eta-r",
+        "0.5",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.1",
+        "--dt-factors",
+        "1,0.5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let text = String::from_utf8_lossy(&o.stdout).to_string();
     assert!(
         matches!(o.status.code(), Some(0) | Some(1)),
@@ -61,44 +58,39 @@ fn convergence_runs_and_reports_stability_per_dt() {
 
 #[test]
 fn strict_stability_refuses_an_unstable_dashpot() {
-    let o = Command::new(common::verify_bin())
-        .args([
-            "shear",
-            "--mu-r",
-            "1",
-            "--eta-r",
-            "0.5",
-            "--preset",
-            "ci",
-            "--native-only",
-            "--strict-stability",
-        ])
-        .output()
-        .unwrap();
+    let o = verify(&[
+        "shear",
+        "--mu-r",
+        "1",
+        "--eta-r",
+        "0.5",
+        "--preset",
+        "ci",
+        "--native-only",
+        "--strict-stability",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         e.contains("unstable") && e.contains("--strict-stability"),
         "{e}"
     );
-    let ok = Command::new(common::verify_bin())
-        .args([
-            "shear",
-            "--mu-r",
-            "0.25",
-            "--preset",
-            "ci",
-            "--native-only",
-            "--strict-stability",
-            "--strain",
-            "0.02",
-            "--seeds",
-            "1",
-            "--out",
-        ])
-        .arg(tempfile::tempdir().unwrap().path().join("o"))
-        .output()
-        .unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let ok = verify(&[
+        "shear",
+        "--mu-r",
+        "0.25",
+        "--preset",
+        "ci",
+        "--native-only",
+        "--strict-stability",
+        "--strain",
+        "0.02",
+        "--seeds",
+        "1",
+        "--out",
+        tmp.path().join("o").to_str().unwrap(),
+    ]);
     // a stable case is not refused (exit 0 or 1 by the stress check of this short window)
     assert_ne!(
         ok.status.code(),
@@ -117,27 +109,25 @@ fn implicit_dashpot_tames_rotational_energy_at_the_paper_dt() {
     let mut erot = Vec::new();
     for model in ["epsd", "epsd_implicit"] {
         let out = dir.path().join(model);
-        let o = Command::new(common::verify_bin())
-            .args([
-                "shear",
-                "--mu-r",
-                "1",
-                "--eta-r",
-                "0.5",
-                "--preset",
-                "ci",
-                "--native-only",
-                "--seeds",
-                "1",
-                "--strain",
-                "0.3",
-                "--rolling",
-                model,
-                "--out",
-            ])
-            .arg(&out)
-            .output()
-            .unwrap();
+        let out_s = out.to_str().unwrap();
+        let o = verify(&[
+            "shear",
+            "--mu-r",
+            "1",
+            "--eta-r",
+            "0.5",
+            "--preset",
+            "ci",
+            "--native-only",
+            "--seeds",
+            "1",
+            "--strain",
+            "0.3",
+            "--rolling",
+            model,
+            "--out",
+            out_s,
+        ]);
         assert!(
             matches!(o.status.code(), Some(0) | Some(1)),
             "{}",
@@ -158,23 +148,17 @@ fn implicit_dashpot_tames_rotational_energy_at_the_paper_dt() {
 
 #[test]
 fn native_only_models_never_reach_liggghts() {
-    let o = Command::new(common::verify_bin())
-        .args(["shear", "--rolling", "epsd_implicit", "--preset", "ci"])
-        .output()
-        .unwrap();
+    let o = verify(&["shear", "--rolling", "epsd_implicit", "--preset", "ci"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("exists only in the native solver"));
-    let o = Command::new(common::verify_bin())
-        .args([
-            "contact",
-            "--case",
-            "rolling_plastic",
-            "--rolling",
-            "epsd_implicit",
-            "--reference",
-        ])
-        .output()
-        .unwrap();
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--rolling",
+        "epsd_implicit",
+        "--reference",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
         String::from_utf8_lossy(&o.stderr).contains("contact cases compare with LIGGGHTS"),
