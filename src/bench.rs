@@ -55,6 +55,9 @@ pub struct BenchRow {
     pub particles: usize,
     pub steps: u64,
     pub seconds: f64,
+    /// CPU time of the timed steps [s] (native: this process, from /proc/self/stat; robust to
+    /// other load on the machine, unlike `seconds`). None for LIGGGHTS.
+    pub cpu_seconds: Option<f64>,
     pub particle_steps_per_s: f64,
     pub per_core: f64,
 }
@@ -83,6 +86,17 @@ fn peak_rss() -> Option<f64> {
     let l = s.lines().find(|l| l.starts_with("VmHWM:"))?;
     let kb: f64 = l.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024.0)
+}
+
+/// CPU time used by this process so far [s] (Linux /proc/self/stat utime + stime, in
+/// USER_HZ = 100 ticks per second).
+fn process_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &s[s.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
 }
 
 /// Tiles a sample k x k times in x and z.
@@ -177,7 +191,7 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
             .num_threads(t)
             .build()
             .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-        let secs = pool.install(|| -> Result<f64> {
+        let (secs, cpu) = pool.install(|| -> Result<(f64, Option<f64>)> {
             let mut s = ShearSim::new(&c, &state);
             s.setup(0.0)?;
             s.step()?;
@@ -186,13 +200,14 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
                 s.step()?;
             }
             s.setup(speed)?;
-            let t0 = Instant::now();
+            let (t0, c0) = (Instant::now(), process_cpu_seconds());
             for _ in 0..steps[1] {
                 s.step()?;
             }
             let el = t0.elapsed().as_secs_f64();
+            let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
             s.check_finite()?;
-            Ok(el)
+            Ok((el, cpu))
         })?;
         if rss_native.is_none() {
             rss_native = match (rss0, peak_rss()) {
@@ -202,8 +217,14 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
         }
         let r = steps[1] as f64 * n as f64 / secs;
         println!(
-            "  native   {t} thread(s): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)",
-            r / t as f64
+            "  native   {t} thread(s): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core; \
+             CPU {})",
+            r / t as f64,
+            cpu.map(|c| format!(
+                "{c:.2} s, {:.3e} particle-steps per CPU-second",
+                steps[1] as f64 * n as f64 / c
+            ))
+            .unwrap_or_else(|| "time not available".into())
         );
         rows.push(BenchRow {
             code: "native".into(),
@@ -211,6 +232,7 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
             particles: n,
             steps: steps[1],
             seconds: secs,
+            cpu_seconds: cpu,
             particle_steps_per_s: r,
             per_core: r / t as f64,
         });
@@ -234,6 +256,7 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
                 particles: n,
                 steps: st,
                 seconds: secs,
+                cpu_seconds: None,
                 particle_steps_per_s: r,
                 per_core: r / p as f64,
             });

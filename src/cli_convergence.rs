@@ -14,7 +14,10 @@ use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_series};
 use crate::solver::shear::ShearSim;
+use crate::spec::shear::ShearCase;
 use crate::spec::stability_shear::{stability, StabilityReport};
+use crate::spec::RollingModel;
+use crate::sweep::fnv1a;
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -31,6 +34,39 @@ pub struct ConvergenceArgs {
     /// native, liggghts or both.
     #[arg(long, default_value = "native")]
     pub engine: String,
+    /// The dt factors at which LIGGGHTS runs (with --engine liggghts|both); a subset of
+    /// --dt-factors. Default: all of them. LIGGGHTS at the smallest dt is the costliest run.
+    #[arg(long, value_delimiter = ',')]
+    pub liggghts_dt_factors: Option<Vec<f64>>,
+    /// Also run the native stable-dashpot model (`epsd_implicit`) at the largest dt factor,
+    /// from the same compacted state: does it give at that dt what epsd gives converged?
+    /// Only with --rolling epsd.
+    #[arg(long)]
+    pub with_implicit: bool,
+}
+
+/// The codes a convergence study can run: LIGGGHTS, the native solver with the case's rolling
+/// model, and the native solver with the stable-dashpot model `epsd_implicit`.
+const CODES: [&str; 3] = ["native", "liggghts", "implicit"];
+
+/// The input hash of one run (FNV-1a of the case JSON, the code and the crate version): a
+/// resumed study reuses a stored series only when this matches.
+fn run_hash(case: &ShearCase, code: &str) -> Result<String> {
+    let text = format!(
+        "{}|{code}|{}",
+        serde_json::to_string(case)?,
+        env!("CARGO_PKG_VERSION")
+    );
+    Ok(format!("{:016x}", fnv1a(text.as_bytes())))
+}
+
+/// The stored series of a run if it is current (its `.hash` file matches).
+fn stored_series(dir: &Path, code: &str, hash: &str) -> Option<Series> {
+    let h = std::fs::read_to_string(dir.join(format!("{code}.hash"))).ok()?;
+    if h.trim() != hash {
+        return None;
+    }
+    Series::read_csv(&dir.join(format!("{code}.csv"))).ok()
 }
 
 /// Figures of one (dt, code).
@@ -53,6 +89,9 @@ pub struct ConvergenceSummary {
     /// (over codes: the smallest such factor).
     pub largest_converged_factor: Option<f64>,
     pub points: Vec<DtPoint>,
+    /// With --with-implicit: whether epsd_implicit at the largest dt agrees (within the CIs)
+    /// with the native epsd result at the smallest dt.
+    pub implicit_matches_finest: Option<bool>,
     pub date_utc: String,
 }
 
@@ -74,6 +113,22 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             "given",
             "--engine native|liggghts|both for verify convergence",
         ));
+    }
+    if a.with_implicit && a.case.rolling != "epsd" {
+        return Err(Error::invalid(
+            "--with-implicit",
+            &a.case.rolling,
+            "--rolling epsd (epsd_implicit is the stable-dashpot variant of epsd)",
+        ));
+    }
+    if let Some(lf) = &a.liggghts_dt_factors {
+        if lf.is_empty() || lf.iter().any(|f| !a.dt_factors.contains(f)) {
+            return Err(Error::invalid(
+                "--liggghts-dt-factors",
+                format!("{lf:?}"),
+                format!("a non-empty subset of --dt-factors {:?}", a.dt_factors),
+            ));
+        }
     }
     let (run_nat, run_lig) = match a.engine.as_str() {
         "native" => (true, false),
@@ -112,18 +167,18 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         a.case.seeds,
         out.display()
     );
-    // per seed: the compacted state at the preset's dt (native), shared by every dt and code
+    let lig_factors = a
+        .liggghts_dt_factors
+        .clone()
+        .unwrap_or_else(|| factors.clone());
+    // per seed: the compacted state at the preset's dt (native), shared by every dt and code;
+    // a run whose current series is stored (same input hash) is not run again
     let mut per: Vec<(String, f64, Vec<Series>)> = Vec::new();
     let mut stab = Vec::new();
     for seed in 1..=a.case.seeds {
         let (case, _) = shear_case(&sargs, seed)?;
         let loose = loose_packing(&case);
-        let mut sim = ShearSim::new(&case, &loose);
-        sim.setup(0.0)?;
-        for _ in 0..case.compression_steps {
-            sim.step()?;
-        }
-        let state = sim.state(&loose);
+        let mut state = None;
         for &f in &factors {
             let mut c = case.clone();
             c.dt = case.dt * f;
@@ -135,27 +190,56 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             }
             let dir = out.join(format!("dt{f}")).join(format!("seed{seed}"));
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-            for (code, on) in [("native", run_nat), ("liggghts", run_lig)] {
+            for code in CODES {
+                let on = match code {
+                    "native" => run_nat,
+                    "liggghts" => run_lig && lig_factors.contains(&f),
+                    _ => a.with_implicit && f == factors[0],
+                };
                 if !on {
                     continue;
                 }
-                println!(
-                    "  seed {seed}, dt factor {f} ({:e} s), {code}: {} steps",
-                    c.dt,
-                    c.total_steps()
-                );
-                let run = if code == "native" {
-                    run_native(&c, &state, &dir, &Progress::hidden())?
-                } else {
-                    run_liggghts(
-                        &c,
-                        &state,
-                        lig.as_ref().expect("located"),
-                        &dir,
-                        &Progress::hidden(),
-                    )?
+                let mut cc = c.clone();
+                if code == "implicit" {
+                    cc.models.rolling = RollingModel::EpsdImplicit;
+                }
+                let hash = run_hash(&cc, code)?;
+                let s = match stored_series(&dir, code, &hash) {
+                    Some(s) => {
+                        println!("  seed {seed}, dt factor {f}, {code}: current result kept");
+                        s
+                    }
+                    None => {
+                        if state.is_none() {
+                            let mut sim = ShearSim::new(&case, &loose);
+                            sim.setup(0.0)?;
+                            for _ in 0..case.compression_steps {
+                                sim.step()?;
+                            }
+                            state = Some(sim.state(&loose));
+                        }
+                        let state = state.as_ref().expect("compacted");
+                        println!(
+                            "  seed {seed}, dt factor {f} ({:e} s), {code}: {} steps",
+                            cc.dt,
+                            cc.total_steps()
+                        );
+                        let run = if code == "liggghts" {
+                            run_liggghts(
+                                &cc,
+                                state,
+                                lig.as_ref().expect("located"),
+                                &dir,
+                                &Progress::hidden(),
+                            )?
+                        } else {
+                            run_native(&cc, state, &dir, &Progress::hidden())?
+                        };
+                        let s = write_series(&cc, &run, &dir.join(format!("{code}.csv")))?;
+                        write_atomic(&dir.join(format!("{code}.hash")), hash.as_bytes())?;
+                        s
+                    }
                 };
-                let s = write_series(&c, &run, &dir.join(format!("{code}.csv")))?;
                 match per.iter_mut().find(|p| p.0 == code && p.1 == f) {
                     Some(p) => p.2.push(s),
                     None => per.push((code.to_string(), f, vec![s])),
@@ -222,6 +306,11 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             (x, None) => x,
         };
     }
+    // the stable-dashpot model at the largest dt against native epsd at the smallest
+    let implicit_matches_finest = points.iter().find(|p| p.code == "implicit").and_then(|im| {
+        let finest = points.iter().rfind(|p| p.code == "native")?;
+        Some((im.steady.mu - finest.steady.mu).abs() <= im.steady.mu_ci95 + finest.steady.mu_ci95)
+    });
     println!(
         "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",
         "code", "dt factor", "dt [s]", "steady mu (95 % CI)", "E_rot [J] (95 % CI)", "S max"
@@ -250,10 +339,19 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             .map(|f| f.to_string())
             .unwrap_or_else(|| "none".into())
     );
+    if let Some(m) = implicit_matches_finest {
+        println!(
+            "  epsd_implicit at dt factor {} {} native epsd at dt factor {} (within the CIs)",
+            factors[0],
+            if m { "agrees with" } else { "DIFFERS from" },
+            factors[factors.len() - 1]
+        );
+    }
     plots(&out, &points)?;
     let summary = ConvergenceSummary {
         converged,
         largest_converged_factor: largest,
+        implicit_matches_finest,
         points,
         date_utc: utc_stamp(),
     };
@@ -288,12 +386,16 @@ fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
             |p: &DtPoint| p.erot.max(1e-300).log10(),
         ),
     ] {
-        let data: Vec<CurveData> = ["liggghts", "native"]
+        let data: Vec<CurveData> = ["liggghts", "native", "implicit"]
             .iter()
             .enumerate()
             .map(|(k, code)| {
                 (
-                    code.to_string(),
+                    if *code == "implicit" {
+                        "native epsd_implicit".to_string()
+                    } else {
+                        code.to_string()
+                    },
                     k,
                     points
                         .iter()

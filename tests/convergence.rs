@@ -6,9 +6,10 @@ use common::verify;
 
 #[test]
 fn convergence_runs_and_reports_stability_per_dt() {
+    let _ = common::liggghts();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = verify(&[
+    let args = [
         "convergence",
         "--mu-r",
         "1",
@@ -22,37 +23,102 @@ fn convergence_runs_and_reports_stability_per_dt() {
         "0.1",
         "--dt-factors",
         "1,0.5",
+        "--engine",
+        "both",
+        "--liggghts-dt-factors",
+        "1",
+        "--with-implicit",
         "--out",
         out.to_str().unwrap(),
-    ]);
-    let text = String::from_utf8_lossy(&o.stdout).to_string();
-    assert!(
-        matches!(o.status.code(), Some(0) | Some(1)),
-        "{text}{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    ];
+    let o = verify(&args);
+    let text = common::text(&o);
+    assert!(matches!(o.status.code(), Some(0) | Some(1)), "{text}");
+    let read = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+    };
+    let s = read();
     assert_eq!(
         s["converged"].as_bool().unwrap(),
         o.status.code() == Some(0)
     );
     let pts = s["points"].as_array().unwrap();
-    assert_eq!(pts.len(), 2);
+    let runs: Vec<(String, f64)> = pts
+        .iter()
+        .map(|p| {
+            (
+                p["code"].as_str().unwrap().to_string(),
+                p["dt_factor"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    // native at both dt, LIGGGHTS only where asked, the stable-dashpot model at the largest dt
+    for want in [
+        ("native", 1.0),
+        ("native", 0.5),
+        ("liggghts", 1.0),
+        ("implicit", 1.0),
+    ] {
+        assert!(
+            runs.contains(&(want.0.to_string(), want.1)),
+            "{want:?} missing from {runs:?}"
+        );
+    }
+    assert_eq!(runs.len(), 4, "{runs:?}");
+    assert!(s["implicit_matches_finest"].is_boolean(), "{s}");
+    let point = |code: &str, f: f64| {
+        pts.iter()
+            .find(|p| p["code"] == code && p["dt_factor"].as_f64() == Some(f))
+            .unwrap()
+    };
     // the stability figure falls with dt (omega_r dt and lambda dt scale with dt)
-    let s1 = pts[0]["stability"]["entries"][0]["criterion"]
-        .as_f64()
-        .unwrap();
-    let s2 = pts[1]["stability"]["entries"][0]["criterion"]
-        .as_f64()
-        .unwrap();
+    let crit = |p: &serde_json::Value| p["stability"]["entries"][0]["criterion"].as_f64().unwrap();
+    let (s1, s2) = (crit(point("native", 1.0)), crit(point("native", 0.5)));
     assert!(s2 < s1 && (s2 / s1 - 0.25).abs() < 0.25, "{s1} {s2}");
     assert!(
-        pts[0]["stability"]["stable"] == false,
+        point("native", 1.0)["stability"]["stable"] == false,
         "paper dt with mu_r 1, eta_r 0.5 must be flagged"
+    );
+    // the explicit dashpot is unstable here, the implicit one is not: it must show less
+    // rotational energy at the same dt from the same compacted state
+    let erot = |p: &serde_json::Value| p["erot"].as_f64().unwrap();
+    assert!(
+        erot(point("implicit", 1.0)) < erot(point("native", 1.0)),
+        "{s}"
     );
     for f in ["mu_dt.svg", "erot_dt.svg"] {
         assert!(out.join(f).is_file());
+    }
+    // resumed: every run's series is current, nothing runs again, same figures
+    let o2 = verify(&args);
+    let text2 = common::text(&o2);
+    assert_eq!(o2.status.code(), o.status.code(), "{text2}");
+    assert_eq!(text2.matches("current result kept").count(), 4, "{text2}");
+    assert_eq!(read()["points"], s["points"]);
+}
+
+#[test]
+fn convergence_refuses_inconsistent_options() {
+    for (extra, field) in [
+        (
+            &["--engine", "both", "--liggghts-dt-factors", "0.3"][..],
+            "--liggghts-dt-factors",
+        ),
+        (
+            &["--rolling", "epsd2", "--with-implicit"][..],
+            "--with-implicit",
+        ),
+        (&["--dt-factors", "1,0"][..], "--dt-factors"),
+    ] {
+        let mut args = vec!["convergence", "--preset", "ci", "--mu-r", "1"];
+        args.extend_from_slice(extra);
+        let o = verify(&args);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", common::text(&o));
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains(field),
+            "{extra:?}: {}",
+            common::text(&o)
+        );
     }
 }
 

@@ -260,6 +260,17 @@ impl TriMesh {
         }
     }
 
+    /// Whether a sphere (centre `p`, radius `r`) is certainly out of contact with triangle `t`
+    /// at image shift `s` because its distance to the triangle's plane exceeds `r` (with a
+    /// relative margin of 1e-9, far above round-off): the distance [`Self::resolve`] finds is
+    /// never smaller than the plane distance, so such a sphere would get `d - r > 0` there and
+    /// no contact. A cheap exact pre-test (one dot product instead of barycentrics).
+    pub fn beyond_plane(&self, t: usize, s: V3, p: V3, r: f64) -> bool {
+        let tri = &self.tris[t];
+        let node0_to_p = sub(p, shifted(tri.nodes[0], s));
+        dot(tri.normal, node0_to_p).abs() > r * (1.0 + 1e-9)
+    }
+
     /// Sphere (centre `p`, radius `r`) against triangle `t` seen at image shift `s`:
     /// `resolveTriSphereContactBary` for non-obtuse triangles. None when the closest feature
     /// is an inactive edge or corner.
@@ -411,5 +422,46 @@ mod tests {
         assert_eq!(hits.len(), 1, "{hits:?}");
         assert!(!hits[0].face);
         assert!((hits[0].d - 0.1).abs() < 1e-12);
+    }
+
+    /// The plane pre-test never rejects a sphere that `resolve` finds touching: over a grid of
+    /// centres around a tent (faces, ridge, valley, images), `beyond_plane` implies no contact.
+    #[test]
+    fn plane_pretest_never_drops_a_contact() {
+        let (lx, lz, h) = (2.0, 1.0, 0.5);
+        let strip = |x0: f64, y0: f64, x1: f64, y1: f64| {
+            vec![
+                [[x0, y0, 0.0], [x1, y1, 0.0], [x1, y1, lz]],
+                [[x0, y0, 0.0], [x1, y1, lz], [x0, y0, lz]],
+            ]
+        };
+        let mut t = strip(0.0, 0.0, 1.0, h);
+        t.extend(strip(1.0, h, 2.0, 0.0));
+        let m = TriMesh::new(&t, [0.0, -1.0, 0.0], [lx, 1.0, lz]);
+        let (mut rejected, mut touching) = (0, 0);
+        for ix in 0..41 {
+            for iy in 0..21 {
+                for iz in 0..5 {
+                    let p = [
+                        -0.5 + 3.0 * ix as f64 / 40.0,
+                        -0.2 + 1.2 * iy as f64 / 20.0,
+                        -0.3 + 1.6 * iz as f64 / 4.0,
+                    ];
+                    for r in [0.05, 0.2] {
+                        for tri in 0..4 {
+                            for s in [[0.0; 3], [lx, 0.0, 0.0], [0.0, 0.0, -lz]] {
+                                let hit = m.resolve(tri, s, p).filter(|h| h.d - r <= 0.0);
+                                touching += hit.is_some() as usize;
+                                if m.beyond_plane(tri, s, p, r) {
+                                    rejected += 1;
+                                    assert!(hit.is_none(), "{p:?} r {r} tri {tri} {hit:?}");
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(rejected > 1000 && touching > 100, "{rejected} {touching}");
     }
 }
