@@ -84,6 +84,14 @@ pub struct DtPoint {
 
 #[derive(Clone, Debug, Serialize)]
 pub struct ConvergenceSummary {
+    /// The case studied (what `verify sweep report --converged` matches points by).
+    pub preset: String,
+    pub rolling: String,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    /// Index and speed [m/s] of the stage whose steady window is measured (the last one).
+    pub stage: usize,
+    pub speed: f64,
     pub converged: bool,
     /// Largest dt factor from which every step to the next smaller dt agrees within the CIs
     /// (over codes: the smallest such factor).
@@ -349,6 +357,12 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
     }
     plots(&out, &points)?;
     let summary = ConvergenceSummary {
+        preset: a.case.preset.clone(),
+        rolling: a.case.rolling.clone(),
+        mu_r: case0.material.rolling_friction,
+        eta_r: case0.material.rolling_damping,
+        stage: case0.stages.len() - 1,
+        speed: case0.stages[case0.stages.len() - 1].speed,
         converged,
         largest_converged_factor: largest,
         implicit_matches_finest,

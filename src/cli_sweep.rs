@@ -46,10 +46,11 @@ pub enum SweepAction {
     /// The paper's figures and conclusions from DIR's results (DIR/report.html).
     Report {
         dir: PathBuf,
-        /// A second sweep of the same points at a smaller dt (`--dt-factor`): its results are
-        /// shown beside these and the conclusions are judged on them too.
+        /// Results at a smaller dt, shown beside these; the conclusions are judged on them
+        /// too. Either a second sweep of the same points (`--dt-factor`) or the output of a
+        /// `verify convergence` study (its finest native dt); repeat for several.
         #[arg(long)]
-        converged: Option<PathBuf>,
+        converged: Vec<PathBuf>,
     },
 }
 
@@ -130,7 +131,7 @@ pub fn sweep(a: SweepArgs) -> Result<Outcome> {
             Ok(Outcome::Agree)
         }
         Some(SweepAction::Report { dir, converged }) => {
-            report(&dir, converged.as_deref())?;
+            report(&dir, &converged)?;
             Ok(Outcome::Agree)
         }
         None => plan_and_run(a.plan),
@@ -379,7 +380,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Outcome> {
         )));
     }
     collect_dir(&out)?;
-    report(&out, None)?;
+    report(&out, &[])?;
     Ok(Outcome::Agree)
 }
 
@@ -419,8 +420,53 @@ struct SweepReport {
     run_wall_s_native: f64,
 }
 
+/// The smaller-dt points of `dir`: a sweep (manifest.json: every result aggregated) or a
+/// `verify convergence` output (summary.json: native at its finest dt).
+fn converged_points(dir: &Path) -> Result<Vec<Point>> {
+    if dir.join("manifest.json").is_file() {
+        let cm = Manifest::load(&dir.join("manifest.json"))?;
+        return Ok(aggregate(&collect(&cm, dir).0));
+    }
+    let bad = || {
+        Error::invalid(
+            "--converged",
+            dir.display(),
+            "a sweep directory (with manifest.json) or the output directory of `verify \
+             convergence` (with a summary.json naming mu_r and eta_r)",
+        )
+    };
+    let text = std::fs::read_to_string(dir.join("summary.json")).map_err(|_| bad())?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|_| bad())?;
+    let num = |x: &serde_json::Value| x.as_f64().ok_or_else(bad);
+    let finest = v["points"]
+        .as_array()
+        .ok_or_else(bad)?
+        .iter()
+        .filter(|p| p["code"] == "native")
+        .min_by(|a, b| {
+            let f = |p: &serde_json::Value| p["dt_factor"].as_f64().unwrap_or(f64::INFINITY);
+            f(a).total_cmp(&f(b))
+        })
+        .ok_or_else(bad)?;
+    Ok(vec![Point {
+        code: "native".into(),
+        mu_r: num(&v["mu_r"])?,
+        eta_r: num(&v["eta_r"])?,
+        stage: v["stage"].as_u64().ok_or_else(bad)? as usize,
+        speed: num(&v["speed"])?,
+        mu: num(&finest["steady"]["mu"])?,
+        mu_ci95: num(&finest["steady"]["mu_ci95"]).unwrap_or(f64::INFINITY),
+        seeds: finest["steady"]["per_seed_mu"]
+            .as_array()
+            .map_or(0, |a| a.len()),
+        erot: num(&finest["erot"])?,
+        dashpot_stable: finest["stability"]["stable"].as_bool().ok_or_else(bad)?,
+        stability_s: num(&finest["stability"]["entries"][0]["criterion"])?,
+    }])
+}
+
 /// The paper's figures, the conclusions and a report page from DIR's (current) results.
-pub fn report(dir: &Path, converged: Option<&Path>) -> Result<()> {
+pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     let m = Manifest::load(&dir.join("manifest.json"))?;
     let (results, missing) = collect(&m, dir);
     if results.is_empty() {
@@ -430,13 +476,10 @@ pub fn report(dir: &Path, converged: Option<&Path>) -> Result<()> {
         )));
     }
     let points = aggregate(&results);
-    let conv_points = match converged {
-        Some(c) => {
-            let cm = Manifest::load(&c.join("manifest.json"))?;
-            aggregate(&collect(&cm, c).0)
-        }
-        None => Vec::new(),
-    };
+    let mut conv_points = Vec::new();
+    for c in converged {
+        conv_points.extend(converged_points(c)?);
+    }
     let codes: Vec<String> = {
         let mut c: Vec<String> = points.iter().map(|p| p.code.clone()).collect();
         c.dedup();
@@ -529,8 +572,9 @@ pub fn report(dir: &Path, converged: Option<&Path>) -> Result<()> {
         page.para(&format!(
             "The explicit rolling dashpot is expected to be unstable at this dt at {} point(s): {}. \
              Results there may show the numerical artefact (spurious rotational energy, low mu); \
-             judge them on a converged-dt sweep (`--dt-factor 0.25`, then `verify sweep report DIR \
-             --converged DIR2`).",
+             judge them on converged-dt results: a sweep at `--dt-factor 0.25` or `verify \
+             convergence` studies of single points, passed as `verify sweep report DIR --converged \
+             DIR2 [--converged DIR3 ...]`.",
             unstable.len(),
             unstable.join(", ")
         ));

@@ -143,6 +143,68 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(text(&o).contains("different manifest"), "{}", text(&o));
+
+    // a convergence study of the unstable point puts its finest-dt result beside the sweep's
+    let conv = dir.path().join("conv");
+    let o = verify(&[
+        "convergence",
+        "--preset",
+        "ci",
+        "--mu-r",
+        "1",
+        "--eta-r",
+        "0.5",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.2",
+        "--dt-factors",
+        "1,0.5",
+        "--out",
+        conv.to_str().unwrap(),
+    ]);
+    assert!(matches!(o.status.code(), Some(0) | Some(1)), "{}", text(&o));
+    let o = verify(&[
+        "sweep",
+        "report",
+        out.to_str().unwrap(),
+        "--converged",
+        conv.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let json = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (rep, study) = (
+        json(&out.join("report.json")),
+        json(&conv.join("summary.json")),
+    );
+    let cp = rep["converged_points"].as_array().unwrap();
+    assert_eq!(cp.len(), 1, "{cp:?}");
+    let finest = study["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["code"] == "native" && p["dt_factor"] == 0.5)
+        .unwrap();
+    assert_eq!(cp[0]["mu"], finest["steady"]["mu"]);
+    assert_eq!(
+        (cp[0]["mu_r"].as_f64(), cp[0]["eta_r"].as_f64()),
+        (Some(1.0), Some(0.5))
+    );
+    assert!(std::fs::read_to_string(out.join("report.html"))
+        .unwrap()
+        .contains("converged dt"));
+    // a directory that is neither a sweep nor a study is refused, naming the option
+    let o = verify(&[
+        "sweep",
+        "report",
+        out.to_str().unwrap(),
+        "--converged",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--converged"), "{}", text(&o));
 }
 
 /// Stops the local SLURM however the test ends.
