@@ -402,6 +402,17 @@ impl ShearSim {
     fn build_wall_candidates(&mut self) {
         let (lx, lz, skin) = (self.box_.lx, self.box_.lz, self.case.skin);
         let meshes = &self.meshes;
+        let y_range: Vec<(f64, f64)> = meshes
+            .iter()
+            .map(|m| {
+                m.tris
+                    .iter()
+                    .flat_map(|t| t.nodes.iter().map(|n| n[1]))
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
+                        (lo.min(y), hi.max(y))
+                    })
+            })
+            .collect();
         let per: Vec<Vec<(u8, u32, u8)>> = self
             .x
             .par_iter()
@@ -409,6 +420,14 @@ impl ShearSim {
             .map(|(p, r)| {
                 let mut c = Vec::new();
                 for (m, mesh) in meshes.iter().enumerate() {
+                    // a particle farther than r + skin from the mesh's y extent has no
+                    // candidate in it (each triangle's box test would fail): skip the mesh
+                    let (ylo, yhi) = y_range[m];
+                    if p[1] < ylo - (r + skin) * (1.0 + 1e-9)
+                        || p[1] > yhi + (r + skin) * (1.0 + 1e-9)
+                    {
+                        continue;
+                    }
                     for img in [4u8, 0, 1, 2, 3, 5, 6, 7, 8] {
                         let s = image_shift(img, lx, lz);
                         for (t, (cen, rb)) in mesh.center.iter().zip(&mesh.r_bound).enumerate() {
