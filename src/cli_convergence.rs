@@ -82,6 +82,17 @@ pub struct DtPoint {
     pub stability: StabilityReport,
 }
 
+/// The convergence verdict of one code.
+#[derive(Clone, Debug, Serialize)]
+pub struct CodeVerdict {
+    pub code: String,
+    pub finest_factor: f64,
+    /// Its two smallest dt agree within their CIs.
+    pub converged: bool,
+    /// Largest factor from which every step to the next smaller dt agrees (when converged).
+    pub largest_converged_factor: Option<f64>,
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct ConvergenceSummary {
     /// The case studied (what `verify sweep report --converged` matches points by).
@@ -97,6 +108,10 @@ pub struct ConvergenceSummary {
     /// (over codes: the smallest such factor).
     pub largest_converged_factor: Option<f64>,
     pub points: Vec<DtPoint>,
+    /// Per code: its finest dt factor, converged there or not, its largest converged factor.
+    pub per_code: Vec<CodeVerdict>,
+    /// Per dt factor where both codes ran: their steady mu agree within the CIs.
+    pub codes_agree: Vec<(f64, bool)>,
     /// With --with-implicit: whether epsd_implicit at the largest dt agrees (within the CIs)
     /// with the native epsd result at the smallest dt.
     pub implicit_matches_finest: Option<bool>,
@@ -280,40 +295,62 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             stability: stab[k].clone(),
         });
     }
-    // verdict per code: converged when the two smallest dt agree within their CIs
-    let mut converged = true;
-    let mut largest: Option<f64> = None;
+    // verdict per code: converged when its two smallest dt agree within their CIs; the
+    // study's verdict comes from the codes that ran down to the smallest factor (LIGGGHTS
+    // limited by --liggghts-dt-factors is judged, and reported, but does not decide it)
+    let agree = |x: &DtPoint, y: &DtPoint| {
+        (x.steady.mu - y.steady.mu).abs() <= x.steady.mu_ci95 + y.steady.mu_ci95
+    };
+    let finest_factor = factors[factors.len() - 1];
+    let mut per_code = Vec::new();
     for code in ["native", "liggghts"] {
         let pts: Vec<&DtPoint> = points.iter().filter(|p| p.code == code).collect();
-        if pts.is_empty() {
+        let Some(finest) = pts.last() else {
             continue;
-        }
-        let finest = pts.last().expect("non-empty");
-        if pts.len() >= 2 {
-            let prev = pts[pts.len() - 2];
-            converged &= (prev.steady.mu - finest.steady.mu).abs()
-                <= prev.steady.mu_ci95 + finest.steady.mu_ci95;
-        } else {
-            converged = false;
-        }
-        // walk up from the finest dt while each step agrees with the next finer one
-        let agree = |x: &DtPoint, y: &DtPoint| {
-            (x.steady.mu - y.steady.mu).abs() <= x.steady.mu_ci95 + y.steady.mu_ci95
         };
-        let mut lc = Some(finest.dt_factor);
-        for k in (0..pts.len().saturating_sub(1)).rev() {
+        let converged = pts.len() >= 2 && agree(pts[pts.len() - 2], finest);
+        // walk up from the finest dt while each step agrees with the next finer one
+        let mut lc = finest.dt_factor;
+        for k in (0..pts.len() - 1).rev() {
             if agree(pts[k], pts[k + 1]) {
-                lc = Some(pts[k].dt_factor);
+                lc = pts[k].dt_factor;
             } else {
                 break;
             }
         }
-        largest = match (largest, lc) {
-            (Some(x), Some(y)) => Some(x.min(y)),
-            (None, y) => y,
-            (x, None) => x,
-        };
+        per_code.push(CodeVerdict {
+            code: code.into(),
+            finest_factor: finest.dt_factor,
+            converged,
+            largest_converged_factor: converged.then_some(lc),
+        });
     }
+    let deciding: Vec<&CodeVerdict> = per_code
+        .iter()
+        .filter(|v| v.finest_factor == finest_factor)
+        .collect();
+    let converged = !deciding.is_empty() && deciding.iter().all(|v| v.converged);
+    let largest = if converged {
+        deciding
+            .iter()
+            .filter_map(|v| v.largest_converged_factor)
+            .min_by(f64::total_cmp)
+    } else {
+        None
+    };
+    // the two codes at each dt both ran: agreement within the CIs
+    let codes_agree: Vec<(f64, bool)> = factors
+        .iter()
+        .filter_map(|f| {
+            let n = points
+                .iter()
+                .find(|p| p.code == "native" && p.dt_factor == *f)?;
+            let l = points
+                .iter()
+                .find(|p| p.code == "liggghts" && p.dt_factor == *f)?;
+            Some((*f, agree(n, l)))
+        })
+        .collect();
     // the stable-dashpot model at the largest dt against native epsd at the smallest
     let implicit_matches_finest = points.iter().find(|p| p.code == "implicit").and_then(|im| {
         let finest = points.iter().rfind(|p| p.code == "native")?;
@@ -334,6 +371,29 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             p.erot,
             p.erot_ci95,
             p.stability.entries[0].criterion
+        );
+    }
+    for v in &per_code {
+        println!(
+            "  {}: down to dt factor {}: {}{}",
+            v.code,
+            v.finest_factor,
+            if v.converged {
+                "its two smallest dt agree"
+            } else {
+                "its two smallest dt differ beyond the CIs (or one dt only)"
+            },
+            if v.finest_factor == finest_factor {
+                ""
+            } else {
+                " (not the study's smallest dt: reported, not deciding)"
+            }
+        );
+    }
+    for (f, ok) in &codes_agree {
+        println!(
+            "  dt factor {f}: LIGGGHTS and native {} within the CIs",
+            if *ok { "agree" } else { "DIFFER" }
         );
     }
     println!(
@@ -365,6 +425,8 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         speed: case0.stages[case0.stages.len() - 1].speed,
         converged,
         largest_converged_factor: largest,
+        per_code,
+        codes_agree,
         implicit_matches_finest,
         points,
         date_utc: utc_stamp(),

@@ -66,6 +66,21 @@ fn convergence_runs_and_reports_stability_per_dt() {
     }
     assert_eq!(runs.len(), 4, "{runs:?}");
     assert!(s["implicit_matches_finest"].is_boolean(), "{s}");
+    // LIGGGHTS stopped at factor 1: judged and reported, but the verdict is native's
+    let per_code = s["per_code"].as_array().unwrap();
+    let finest_of = |code: &str| {
+        per_code.iter().find(|v| v["code"] == code).unwrap()["finest_factor"]
+            .as_f64()
+            .unwrap()
+    };
+    assert_eq!((finest_of("native"), finest_of("liggghts")), (0.5, 1.0));
+    let native_converged = per_code.iter().find(|v| v["code"] == "native").unwrap()["converged"]
+        .as_bool()
+        .unwrap();
+    assert_eq!(s["converged"].as_bool(), Some(native_converged));
+    let ca = s["codes_agree"].as_array().unwrap();
+    assert_eq!(ca.len(), 1, "{ca:?}");
+    assert_eq!(ca[0][0].as_f64(), Some(1.0));
     let point = |code: &str, f: f64| {
         pts.iter()
             .find(|p| p["code"] == code && p["dt_factor"].as_f64() == Some(f))
