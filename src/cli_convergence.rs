@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
-use crate::report::plot::{curves, line_plot, CurveData};
+use crate::report::plot::{line_plot, Curve};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_series};
@@ -476,25 +476,32 @@ fn block_mean_ci95(s: &Series, header: &str, window: (u64, u64)) -> (f64, f64) {
     )
 }
 
+/// One code's curve: label, colour, points, CI half-widths.
+type ErrSet = (String, usize, Vec<(f64, f64)>, Vec<f64>);
+
 fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
-    for (file, title, ylab, get) in [
+    type Get = fn(&DtPoint) -> f64;
+    for (file, title, ylab, get, err) in [
         (
             "mu_dt.svg",
-            "steady friction coefficient against time step",
+            "steady friction coefficient against time step (95 % CI bars)",
             "mu",
-            (|p: &DtPoint| p.steady.mu) as fn(&DtPoint) -> f64,
+            (|p: &DtPoint| p.steady.mu) as Get,
+            (|p: &DtPoint| p.steady.mu_ci95) as Get,
         ),
         (
             "erot_dt.svg",
             "mean rotational kinetic energy against time step (log scale)",
             "log10 E_rot [J]",
             |p: &DtPoint| p.erot.max(1e-300).log10(),
+            |_: &DtPoint| 0.0,
         ),
     ] {
-        let data: Vec<CurveData> = ["liggghts", "native", "implicit"]
+        let sets: Vec<ErrSet> = ["liggghts", "native", "implicit"]
             .iter()
             .enumerate()
             .map(|(k, code)| {
+                let sel: Vec<&DtPoint> = points.iter().filter(|p| p.code == *code).collect();
                 (
                     if *code == "implicit" {
                         "native epsd_implicit".to_string()
@@ -502,16 +509,26 @@ fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
                         code.to_string()
                     },
                     k,
-                    points
-                        .iter()
-                        .filter(|p| p.code == *code)
-                        .map(|p| (p.dt, get(p)))
+                    sel.iter().map(|p| (p.dt, get(p))).collect::<Vec<_>>(),
+                    sel.iter()
+                        .map(|p| {
+                            let e = err(p);
+                            if e.is_finite() {
+                                e
+                            } else {
+                                0.0
+                            }
+                        })
                         .collect(),
                 )
             })
-            .filter(|d: &CurveData| !d.2.is_empty())
+            .filter(|d| !d.2.is_empty())
             .collect();
-        line_plot(&out.join(file), title, "dt [s]", ylab, &curves(&data))?;
+        let cs: Vec<Curve> = sets
+            .iter()
+            .map(|(label, k, pts, e)| Curve::new(label, pts, *k).with_err(e))
+            .collect();
+        line_plot(&out.join(file), title, "dt [s]", ylab, &cs)?;
     }
     Ok(())
 }
