@@ -38,6 +38,12 @@ struct WallSlots {
 }
 
 /// The 9 periodic image shifts (x, z) of a triangle; index 4 is the triangle itself.
+/// Smallest piece of a parallel loop over particles with little work per item (integration,
+/// the rebuild check): below this, rayon's task overhead outweighs the work.
+const LIGHT_CHUNK: usize = 1024;
+/// Smallest piece of the force loops (pairs, per-particle sums and plate contacts).
+const HEAVY_CHUNK: usize = 256;
+
 fn image_shift(k: u8, lx: f64, lz: f64) -> V3 {
     let (ix, iz) = ((k / 3) as f64 - 1.0, (k % 3) as f64 - 1.0);
     [ix * lx, 0.0, iz * lz]
@@ -309,6 +315,7 @@ impl ShearSim {
             .zip(self.omega.par_iter_mut())
             .zip(self.f.par_iter().zip(self.torque.par_iter()))
             .zip(self.rotation.par_iter_mut())
+            .with_min_len(LIGHT_CHUNK)
             .enumerate()
             .for_each(|(i, ((((x, v), w), (f, t)), rot))| {
                 nve.initial(x, v, w, *f, *t, radius[i], mass[i]);
@@ -337,6 +344,7 @@ impl ShearSim {
             .zip(self.v.par_iter_mut())
             .zip(self.omega.par_iter_mut())
             .zip(self.f.par_iter().zip(self.torque.par_iter()))
+            .with_min_len(LIGHT_CHUNK)
             .enumerate()
             .for_each(|(i, (((_, v), w), (f, t)))| nve.finish(v, w, *f, *t, radius[i], mass[i]));
         if self.implicit {
@@ -349,10 +357,15 @@ impl ShearSim {
     fn needs_rebuild(&self) -> bool {
         let trigger = 0.5 * self.case.skin;
         let t2 = trigger * trigger;
-        let moved = self.x.par_iter().zip(self.xhold.par_iter()).any(|(x, h)| {
-            let d = [x[0] - h[0], x[1] - h[1], x[2] - h[2]];
-            d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > t2
-        });
+        let moved = self
+            .x
+            .par_iter()
+            .zip(self.xhold.par_iter())
+            .with_min_len(LIGHT_CHUNK)
+            .any(|(x, h)| {
+                let d = [x[0] - h[0], x[1] - h[1], x[2] - h[2]];
+                d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > t2
+            });
         moved
             || (self.bottom.offset_x - self.bottom_hold).abs() > trigger
             || (self.top.base_y - self.top_hold).abs() > trigger
@@ -470,6 +483,7 @@ impl ShearSim {
                     .par_iter_mut()
                     .zip(self.pair_damp.par_iter_mut()),
             )
+            .with_min_len(HEAVY_CHUNK)
             .for_each(|(p, (out, damp))| {
                 let (i, j) = (p.i as usize, p.j as usize);
                 let xj = [
@@ -521,6 +535,7 @@ impl ShearSim {
             .zip(self.torque.par_iter_mut())
             .zip(self.wall.par_iter_mut())
             .zip(self.wall_force.par_iter_mut().zip(self.imp.par_iter_mut()))
+            .with_min_len(HEAVY_CHUNK)
             .enumerate()
             .for_each(|(q, (((f, t), slots), (wf, imp)))| {
                 *f = [0.0; 3];
