@@ -4,7 +4,7 @@
 
 use crate::cli::{utc_stamp, Outcome};
 use crate::cli_shear::{shear_case, ShearArgs};
-use crate::compare::{mean_ci95, steady, steady_window, Steady};
+use crate::compare::{block_ci95, mean_ci95, steady, steady_window, Steady};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
@@ -281,7 +281,14 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             .map(|s| s.window_mean("erot[J]", window))
             .collect();
         let (erot, erot_ci95) = if series.len() == 1 {
-            block_mean_ci95(&series[0], "erot[J]", window)
+            (
+                erots[0],
+                block_ci95(
+                    &series[0]
+                        .window_values("erot[J]", window)
+                        .unwrap_or_default(),
+                ),
+            )
         } else {
             mean_ci95(&erots)
         };
@@ -448,32 +455,6 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
     } else {
         Outcome::Disagree
     })
-}
-
-/// Mean of a column over the steady window and the 95 % CI half-width from 10 block means
-/// (what a single seed offers, as for the steady mu).
-fn block_mean_ci95(s: &Series, header: &str, window: (u64, u64)) -> (f64, f64) {
-    let Some(c) = s.col(header) else {
-        return (f64::NAN, f64::NAN);
-    };
-    let v: Vec<f64> = s
-        .steps
-        .iter()
-        .zip(&s.rows)
-        .filter(|(st, _)| **st > window.0 && **st <= window.1)
-        .map(|(_, r)| r[c])
-        .collect();
-    let nb = 10.min(v.len());
-    let blocks: Vec<f64> = (0..nb)
-        .map(|b| {
-            let chunk = &v[b * v.len() / nb..(b + 1) * v.len() / nb];
-            chunk.iter().sum::<f64>() / chunk.len().max(1) as f64
-        })
-        .collect();
-    (
-        v.iter().sum::<f64>() / v.len().max(1) as f64,
-        mean_ci95(&blocks).1,
-    )
 }
 
 /// One code's curve: label, colour, points, CI half-widths.

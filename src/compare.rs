@@ -275,6 +275,19 @@ pub fn mean_ci95(x: &[f64]) -> (f64, f64) {
     (mean, t95(n - 1) * (var / n as f64).sqrt())
 }
 
+/// 95 % CI half-width of the mean of a time series from 10 block means (what one seed offers:
+/// consecutive samples are correlated, block means much less).
+pub fn block_ci95(v: &[f64]) -> f64 {
+    let nb = 10.min(v.len());
+    let blocks: Vec<f64> = (0..nb)
+        .map(|b| {
+            let chunk = &v[b * v.len() / nb..(b + 1) * v.len() / nb];
+            chunk.iter().sum::<f64>() / chunk.len().max(1) as f64
+        })
+        .collect();
+    mean_ci95(&blocks).1
+}
+
 /// Steady-state figures of one code over its seeds.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Steady {
@@ -297,7 +310,7 @@ pub fn steady_window(stage_start: u64, stage_end: u64) -> (u64, u64) {
 pub fn steady(series: &[Series], window: (u64, u64), area: f64) -> Steady {
     let mut per_seed_mu = Vec::new();
     let mut per_seed_stress = Vec::new();
-    let mut blocks_single = Vec::new();
+    let mut single_ci = f64::INFINITY;
     for s in series {
         let (cmu, cfy) = (
             s.col("mu[-]").expect("mu column"),
@@ -316,17 +329,11 @@ pub fn steady(series: &[Series], window: (u64, u64), area: f64) -> Steady {
         per_seed_stress
             .push(rows.iter().map(|r| r[cfy]).sum::<f64>() / rows.len().max(1) as f64 / area);
         if series.len() == 1 {
-            let nb = 10.min(mu.len());
-            blocks_single = (0..nb)
-                .map(|b| {
-                    let chunk = &mu[b * mu.len() / nb..(b + 1) * mu.len() / nb];
-                    chunk.iter().sum::<f64>() / chunk.len().max(1) as f64
-                })
-                .collect();
+            single_ci = block_ci95(&mu);
         }
     }
     let (mu, mu_ci95) = if series.len() == 1 {
-        (per_seed_mu[0], mean_ci95(&blocks_single).1)
+        (per_seed_mu[0], single_ci)
     } else {
         mean_ci95(&per_seed_mu)
     };

@@ -47,17 +47,21 @@ impl Series {
     /// Mean of column `header` over the rows with step in `(w.0, w.1]`; NaN when the column is
     /// missing or the window empty.
     pub fn window_mean(&self, header: &str, w: (u64, u64)) -> f64 {
-        let Some(c) = self.col(header) else {
-            return f64::NAN;
-        };
-        let v: Vec<f64> = self
-            .steps
-            .iter()
-            .zip(&self.rows)
-            .filter(|(st, _)| **st > w.0 && **st <= w.1)
-            .map(|(_, r)| r[c])
-            .collect();
+        let v = self.window_values(header, w).unwrap_or_default();
         v.iter().sum::<f64>() / v.len() as f64
+    }
+
+    /// The values of column `header` with step in `(w.0, w.1]`; None when it is missing.
+    pub fn window_values(&self, header: &str, w: (u64, u64)) -> Option<Vec<f64>> {
+        let c = self.col(header)?;
+        Some(
+            self.steps
+                .iter()
+                .zip(&self.rows)
+                .filter(|(st, _)| **st > w.0 && **st <= w.1)
+                .map(|(_, r)| r[c])
+                .collect(),
+        )
     }
 
     pub fn column(&self, header: &str) -> Option<Vec<f64>> {

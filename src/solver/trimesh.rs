@@ -397,9 +397,9 @@ mod tests {
         assert_eq!(hits, 1);
     }
 
-    #[test]
-    fn ridge_edge_is_active_on_one_triangle() {
-        // a tent: two strips meeting at a ridge along z at x = 1
+    /// A tent in a 2 x 1 periodic box: two strips of two triangles meeting at a ridge along z
+    /// at x = 1, height h = 0.5. Returns the mesh and h.
+    fn tent() -> (TriMesh, f64) {
         let (lx, lz, h) = (2.0, 1.0, 0.5);
         let strip = |x0: f64, y0: f64, x1: f64, y1: f64| {
             vec![
@@ -409,7 +409,12 @@ mod tests {
         };
         let mut t = strip(0.0, 0.0, 1.0, h);
         t.extend(strip(1.0, h, 2.0, 0.0));
-        let m = TriMesh::new(&t, [0.0, -1.0, 0.0], [lx, 1.0, lz]);
+        (TriMesh::new(&t, [0.0, -1.0, 0.0], [lx, 1.0, lz]), h)
+    }
+
+    #[test]
+    fn ridge_edge_is_active_on_one_triangle() {
+        let (m, h) = tent();
         let ridge: usize = m.edge_active.iter().flatten().filter(|a| **a).count();
         // the ridge (once) and the valley at the periodic seam x = 0 = 2 (once)
         assert_eq!(ridge, 2, "{:?}", m.edge_active);
@@ -428,16 +433,8 @@ mod tests {
     /// centres around a tent (faces, ridge, valley, images), `beyond_plane` implies no contact.
     #[test]
     fn plane_pretest_never_drops_a_contact() {
-        let (lx, lz, h) = (2.0, 1.0, 0.5);
-        let strip = |x0: f64, y0: f64, x1: f64, y1: f64| {
-            vec![
-                [[x0, y0, 0.0], [x1, y1, 0.0], [x1, y1, lz]],
-                [[x0, y0, 0.0], [x1, y1, lz], [x0, y0, lz]],
-            ]
-        };
-        let mut t = strip(0.0, 0.0, 1.0, h);
-        t.extend(strip(1.0, h, 2.0, 0.0));
-        let m = TriMesh::new(&t, [0.0, -1.0, 0.0], [lx, 1.0, lz]);
+        let (m, _) = tent();
+        let (lx, lz) = (2.0, 1.0);
         let (mut rejected, mut touching) = (0, 0);
         for ix in 0..41 {
             for iy in 0..21 {
