@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::{last_loop_time, Liggghts, LOG_NAME};
 use crate::packing::{loose_packing, Packing};
-use crate::solver::shear::ShearSim;
+use crate::solver::shear::{compact, ShearSim};
 use crate::spec::shear::{ShearCase, Stage};
 use crate::spec::RollingModel;
 use clap::Args;
@@ -151,13 +151,7 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
         a.preset, base.particles, a.compression_steps
     );
     let loose = loose_packing(&base);
-    let mut sim = ShearSim::new(&base, &loose);
-    sim.setup(0.0)?;
-    for _ in 0..a.compression_steps {
-        sim.step()?;
-    }
-    let dense = sim.state(&loose);
-    drop(sim);
+    let dense = compact(&base, &loose, a.compression_steps)?;
     let (case, state) = tile(&base, &dense, k);
     let n = state.radius.len();
     println!(

@@ -13,11 +13,10 @@ use crate::report::plot::{line_plot, Curve};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_series};
-use crate::solver::shear::ShearSim;
-use crate::spec::shear::ShearCase;
+use crate::solver::shear::compact;
 use crate::spec::stability_shear::{stability, StabilityReport};
 use crate::spec::RollingModel;
-use crate::sweep::fnv1a;
+use crate::sweep::run_input_hash;
 use clap::Args;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -48,17 +47,6 @@ pub struct ConvergenceArgs {
 /// The codes a convergence study can run: LIGGGHTS, the native solver with the case's rolling
 /// model, and the native solver with the stable-dashpot model `epsd_implicit`.
 const CODES: [&str; 3] = ["native", "liggghts", "implicit"];
-
-/// The input hash of one run (FNV-1a of the case JSON, the code and the crate version): a
-/// resumed study reuses a stored series only when this matches.
-fn run_hash(case: &ShearCase, code: &str) -> Result<String> {
-    let text = format!(
-        "{}|{code}|{}",
-        serde_json::to_string(case)?,
-        env!("CARGO_PKG_VERSION")
-    );
-    Ok(format!("{:016x}", fnv1a(text.as_bytes())))
-}
 
 /// The stored series of a run if it is current (its `.hash` file matches).
 fn stored_series(dir: &Path, code: &str, hash: &str) -> Option<Series> {
@@ -223,7 +211,7 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
                 if code == "implicit" {
                     cc.models.rolling = RollingModel::EpsdImplicit;
                 }
-                let hash = run_hash(&cc, code)?;
+                let hash = run_input_hash(&cc, code)?;
                 let s = match stored_series(&dir, code, &hash) {
                     Some(s) => {
                         println!("  seed {seed}, dt factor {f}, {code}: current result kept");
@@ -231,12 +219,7 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
                     }
                     None => {
                         if state.is_none() {
-                            let mut sim = ShearSim::new(&case, &loose);
-                            sim.setup(0.0)?;
-                            for _ in 0..case.compression_steps {
-                                sim.step()?;
-                            }
-                            state = Some(sim.state(&loose));
+                            state = Some(compact(&case, &loose, case.compression_steps)?);
                         }
                         let state = state.as_ref().expect("compacted");
                         println!(
@@ -364,7 +347,7 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
     // the stable-dashpot model at the largest dt against native epsd at the smallest
     let implicit_matches_finest = points.iter().find(|p| p.code == "implicit").and_then(|im| {
         let finest = points.iter().rfind(|p| p.code == "native")?;
-        Some((im.steady.mu - finest.steady.mu).abs() <= im.steady.mu_ci95 + finest.steady.mu_ci95)
+        Some(agree(im, finest))
     });
     println!(
         "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",

@@ -208,10 +208,16 @@ fn input_hash(base: &SweepBase, r: &RunSpec) -> Result<String> {
 
 /// The input hash of a seed's case run by `engine`.
 fn case_hash(case: &ShearCase, engine: Engine) -> Result<String> {
+    run_input_hash(case, &format!("{engine:?}"))
+}
+
+/// The input hash of a run: FNV-1a 64 of the case JSON, what runs it (`tag`: a sweep's
+/// engine, a convergence study's code) and the crate version, as 16 hex digits. A stored
+/// result is reused only when its hash matches.
+pub fn run_input_hash(case: &ShearCase, tag: &str) -> Result<String> {
     let text = format!(
-        "{}|{:?}|{}",
+        "{}|{tag}|{}",
         serde_json::to_string(case)?,
-        engine,
         env!("CARGO_PKG_VERSION")
     );
     Ok(format!("{:016x}", fnv1a(text.as_bytes())))

@@ -137,19 +137,16 @@ fn convergence_refuses_inconsistent_options() {
     }
 }
 
+/// `verify shear --preset ci --native-only` with `extra`.
+fn ci_shear(extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["shear", "--preset", "ci", "--native-only"];
+    args.extend_from_slice(extra);
+    verify(&args)
+}
+
 #[test]
 fn strict_stability_refuses_an_unstable_dashpot() {
-    let o = verify(&[
-        "shear",
-        "--mu-r",
-        "1",
-        "--eta-r",
-        "0.5",
-        "--preset",
-        "ci",
-        "--native-only",
-        "--strict-stability",
-    ]);
+    let o = ci_shear(&["--mu-r", "1", "--eta-r", "0.5", "--strict-stability"]);
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -157,13 +154,9 @@ fn strict_stability_refuses_an_unstable_dashpot() {
         "{e}"
     );
     let tmp = tempfile::tempdir().unwrap();
-    let ok = verify(&[
-        "shear",
+    let ok = ci_shear(&[
         "--mu-r",
         "0.25",
-        "--preset",
-        "ci",
-        "--native-only",
         "--strict-stability",
         "--strain",
         "0.02",
@@ -191,15 +184,11 @@ fn implicit_dashpot_tames_rotational_energy_at_the_paper_dt() {
     for model in ["epsd", "epsd_implicit"] {
         let out = dir.path().join(model);
         let out_s = out.to_str().unwrap();
-        let o = verify(&[
-            "shear",
+        let o = ci_shear(&[
             "--mu-r",
             "1",
             "--eta-r",
             "0.5",
-            "--preset",
-            "ci",
-            "--native-only",
             "--seeds",
             "1",
             "--strain",

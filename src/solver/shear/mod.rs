@@ -780,6 +780,18 @@ impl ShearSim {
     }
 }
 
+/// The dense state after `steps` compression steps of `case` from `loose` (plates still, the
+/// servo pressing the top plate), as the initial state of new runs: what `verify convergence`
+/// shares between its dt and codes, and what `verify bench` times from.
+pub fn compact(case: &ShearCase, loose: &Packing, steps: u64) -> Result<Packing> {
+    let mut sim = ShearSim::new(case, loose);
+    sim.setup(0.0)?;
+    for _ in 0..steps {
+        sim.step()?;
+    }
+    Ok(sim.state(loose))
+}
+
 /// Squared distance from `p` to the axis-aligned bounding box of a triangle shifted by `s`.
 fn box_distance_sq(p: &V3, nodes: &[V3; 3], s: V3) -> f64 {
     let mut d2 = 0.0;
