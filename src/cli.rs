@@ -56,6 +56,9 @@ pub enum Command {
     /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,
     /// report with the paper's figures and conclusions.
     Sweep(crate::cli_sweep::SweepArgs),
+    /// The sheared gouge contact by contact: native restarted from LIGGGHTS' recorded states
+    /// (histories included) and compared with LIGGGHTS' next steps.
+    Replay(crate::cli_replay::ReplayArgs),
     /// Throughput of both codes on the same dense shear state (particle-steps per second).
     Bench(crate::bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
@@ -108,6 +111,7 @@ pub fn run(cli: Cli) -> Result<Outcome> {
         Command::Contact(a) => contact(a),
         Command::Shear(a) => crate::cli_shear::shear(a),
         Command::Bench(a) => crate::bench::bench(a),
+        Command::Replay(a) => crate::cli_replay::replay(a),
         Command::Nightly(a) => crate::cli_nightly::nightly(a),
         Command::Sweep(a) => crate::cli_sweep::sweep(a),
         Command::Convergence(a) => crate::cli_convergence::convergence(a),
@@ -156,7 +160,7 @@ fn write_deck(deck: &Deck, dir: &Path) -> Result<()> {
     Ok(())
 }
 
-fn default_out(prefix: &str) -> PathBuf {
+pub fn default_out(prefix: &str) -> PathBuf {
     PathBuf::from("runs").join(format!("{prefix}-{}", utc_stamp()))
 }
 

@@ -43,6 +43,77 @@ fn stl(name: &str, tris: &[[[f64; 3]; 3]]) -> String {
 
 /// Renders the deck for a validated shear case and its initial packing.
 pub fn shear_deck(case: &ShearCase, packing: &Packing) -> Deck {
+    shear_deck_with(case, packing, &DeckExtras::default())
+}
+
+/// What a study adds to the production deck: denser thermo, an earlier end, and commands
+/// (dumps, computes) issued before the first run. Generated text only, never case text.
+#[derive(Clone, Debug, Default)]
+pub struct DeckExtras {
+    /// Thermo interval (default: the case's `output_every`).
+    pub thermo_every: Option<u64>,
+    /// Stop after this step (the runs after it are dropped, the one holding it shortened).
+    pub end_step: Option<u64>,
+    /// Commands before the compression run.
+    pub before_runs: String,
+}
+
+/// The replay's dumps: at every step of each window `[s, s + k]`, the atoms (id, position,
+/// image flags, velocity, angular velocity, force, torque), every touching pair and every
+/// particle-triangle contact (ids, force and torque on the first partner, the history) at 17
+/// significant digits. The schedule is an equal-style variable giving the next dump step
+/// (`dump_modify every v_name`), `max(a, b)` written as `(a + b + |a - b|) / 2`.
+pub fn replay_dumps(windows: &[(u64, u64)], n_hist: usize) -> String {
+    let max2 = |a: &str, b: &str| format!("(({a})+({b})+abs(({a})-({b})))/2");
+    let mut terms = Vec::new();
+    let mut prev_end: Option<u64> = None;
+    for &(s, e) in windows {
+        let lo = prev_end
+            .map(|p| format!("(step>={p})*"))
+            .unwrap_or_default();
+        terms.push(format!("{lo}(step<{e})*{}", max2("step+1", &s.to_string())));
+        prev_end = Some(e);
+    }
+    if let Some(p) = prev_end {
+        terms.push(format!("(step>={p})*1e15"));
+    }
+    let ncol = 9 + n_hist;
+    let g17 = |n: usize| vec!["%.17g"; n].join(" ");
+    let cols = |c: &str| {
+        (1..=ncol)
+            .map(|k| format!("c_{c}[{k}]"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let mut d = String::new();
+    let w = &mut d;
+    writeln!(w, "# replay dumps").unwrap();
+    writeln!(w, "variable rnext equal \"{}\"", terms.join("+")).unwrap();
+    writeln!(w, "dump ratoms all custom 1 {REPLAY_ATOMS}*.dump id x y z ix iy iz vx vy vz omegax omegay omegaz fx fy fz tqx tqy tqz").unwrap();
+    writeln!(
+        w,
+        "dump_modify ratoms every v_rnext sort id format \"%d {} %d %d %d {}\"",
+        g17(3),
+        g17(12)
+    )
+    .unwrap();
+    for (c, style, file) in [
+        ("rpair", "pair/gran/local", REPLAY_PAIRS),
+        ("rwall", "wall/gran/local", REPLAY_WALLS),
+    ] {
+        writeln!(w, "compute {c} all {style} id force torque history").unwrap();
+        writeln!(w, "dump d{c} all local 1 {file}*.dump {}", cols(c)).unwrap();
+        writeln!(w, "dump_modify d{c} every v_rnext format \"{}\"", g17(ncol)).unwrap();
+    }
+    d
+}
+
+pub const REPLAY_ATOMS: &str = "ratoms_";
+pub const REPLAY_PAIRS: &str = "rpairs_";
+pub const REPLAY_WALLS: &str = "rwalls_";
+
+/// Renders the deck with study additions (see [`DeckExtras`]).
+pub fn shear_deck_with(case: &ShearCase, packing: &Packing, extras: &DeckExtras) -> Deck {
     let m = &case.material;
     let rolling = case.models.rolling;
     let mut d = String::new();
@@ -71,7 +142,17 @@ pub fn shear_deck(case: &ShearCase, packing: &Packing) -> Deck {
     }
     writeln!(w, "read_data {}", super::DATA_NAME).unwrap();
     writeln!(w, "neighbor {} bin", num(case.skin)).unwrap();
-    writeln!(w, "neigh_modify delay 0").unwrap();
+    if case.neighbor == crate::spec::shear::NeighborSchedule::default() {
+        writeln!(w, "neigh_modify delay 0").unwrap();
+    } else {
+        writeln!(
+            w,
+            "neigh_modify delay 0 every {} check {}",
+            case.neighbor.every,
+            if case.neighbor.check { "yes" } else { "no" }
+        )
+        .unwrap();
+    }
     super::material_fixes(w, m, rolling);
     let (models, settings) = super::model_args(&case.models);
     writeln!(w, "pair_style gran {models}{settings}").unwrap();
@@ -106,7 +187,12 @@ pub fn shear_deck(case: &ShearCase, packing: &Packing) -> Deck {
     writeln!(w, "compute rke all erotate/sphere").unwrap();
     writeln!(w, "thermo_style custom step {}", THERMO_COLUMNS.join(" ")).unwrap();
     writeln!(w, "thermo_modify format float %.17g").unwrap();
-    writeln!(w, "thermo {}", case.output_every).unwrap();
+    writeln!(
+        w,
+        "thermo {}",
+        extras.thermo_every.unwrap_or(case.output_every)
+    )
+    .unwrap();
     if case.snapshot_every > 0 {
         writeln!(
             w,
@@ -116,9 +202,17 @@ pub fn shear_deck(case: &ShearCase, packing: &Packing) -> Deck {
         .unwrap();
         writeln!(w, "dump_modify snap sort id").unwrap();
     }
+    w.push_str(&extras.before_runs);
+    let end = extras.end_step.unwrap_or(u64::MAX);
     writeln!(w, "# compression by the servo").unwrap();
-    writeln!(w, "run {}", case.compression_steps).unwrap();
+    writeln!(w, "run {}", case.compression_steps.min(end)).unwrap();
+    let mut start = case.compression_steps;
     for (k, (stage, steps)) in case.stages.iter().zip(case.stage_steps()).enumerate() {
+        if start >= end {
+            break;
+        }
+        let steps = steps.min(end - start);
+        start += steps;
         writeln!(w, "# shear stage {}: {} m/s", k + 1, num(stage.speed)).unwrap();
         writeln!(
             w,

@@ -360,6 +360,11 @@ pub struct TriContactRecord {
     pub tri: u32,
     pub keep: bool,
     pub hist: super::contact::ContactHistory,
+    /// Force and torque of the last evaluation on the particle, and whether it was a face
+    /// contact (observers only: the replay compares them with LIGGGHTS' wall/gran/local).
+    pub force: [f64; 3],
+    pub torque: [f64; 3],
+    pub face: bool,
 }
 
 #[cfg(test)]

@@ -51,6 +51,28 @@ pub struct Servo {
     pub kd: f64,
 }
 
+/// When the neighbour list is rebuilt (LIGGGHTS `neigh_modify delay 0 every N check yes|no`,
+/// `Neighbor::decide`): every `every` steps since the last build, and with `check` only if some
+/// atom moved more than skin/2 since then. Independently of both, a plate whose nodes moved
+/// more than skin/2 since the last build forces a rebuild at the *next* step (fix_mesh.cpp
+/// `pre_force` sets `next_reneighbor = step + 1`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NeighborSchedule {
+    pub every: u64,
+    pub check: bool,
+}
+
+impl Default for NeighborSchedule {
+    /// LIGGGHTS' default and the production setting: check every step.
+    fn default() -> Self {
+        NeighborSchedule {
+            every: 1,
+            check: true,
+        }
+    }
+}
+
 /// One shear stage: bottom plate speed [m/s] until `strain` (displacement / estimated height).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -88,6 +110,9 @@ pub struct ShearCase {
     pub servo: Servo,
     /// Neighbour skin [m].
     pub skin: f64,
+    /// Neighbour rebuild schedule (default: every step, if an atom moved more than skin/2).
+    #[serde(default)]
+    pub neighbor: NeighborSchedule,
     /// Steps of servo compression before shearing.
     pub compression_steps: u64,
     pub stages: Vec<Stage>,
@@ -159,6 +184,7 @@ impl ShearCase {
                 kd: 0.0,
             },
             skin: 0.05e-3,
+            neighbor: NeighborSchedule::default(),
             compression_steps: 40_000,
             stages: vec![
                 Stage {
@@ -429,6 +455,26 @@ impl ShearCase {
                 format!(
                     "< skin / (2 dt) = {:e} m/s (LIGGGHTS' servo requirement)",
                     self.skin / (2.0 * self.dt)
+                ),
+            ));
+        }
+        if !(1..=1000).contains(&self.neighbor.every) {
+            return Err(Error::invalid(
+                "neighbor.every",
+                self.neighbor.every,
+                "1 ..= 1000 steps",
+            ));
+        }
+        if !self.neighbor.check
+            && self.servo.vel_max * self.neighbor.every as f64 * self.dt >= 0.5 * self.skin
+        {
+            return Err(Error::invalid(
+                "neighbor.every",
+                self.neighbor.every,
+                format!(
+                    "< skin / (2 vel_max dt) = {:.0} with check = false (the plate must not \
+                     outrun half the skin between fixed-interval rebuilds)",
+                    0.5 * self.skin / (self.servo.vel_max * self.dt)
                 ),
             ));
         }

@@ -12,6 +12,7 @@
 
 pub mod neighbor;
 pub mod plate;
+pub mod replay;
 pub mod servo;
 
 use super::contact::{surfaces_intersect, ContactData, ForceData};
@@ -57,6 +58,8 @@ struct PairAux {
     damping: f64,
     en: V3,
     contact: u8,
+    /// The tangential force is at the Coulomb limit `mu_p |Fn|` (to 1e-9, a label only).
+    sliding: bool,
 }
 
 /// One output record (SI units).
@@ -92,6 +95,7 @@ pub struct Snapshot {
 }
 
 /// The shear box state and time loop.
+#[derive(Clone)]
 pub struct ShearSim {
     case: ShearCase,
     params: PairParams,
@@ -138,6 +142,12 @@ pub struct ShearSim {
     pub shear_displacement: f64,
     bottom_hold: f64,
     top_hold: f64,
+    /// Observers only (the replay): velocities and angular velocities at force time.
+    force_time_velocities: Option<(Vec<V3>, Vec<V3>)>,
+    /// Steps since the last neighbour build (`Neighbor::ago`).
+    ago: u64,
+    /// A plate moved more than skin/2 at the previous step: rebuild now (`next_reneighbor`).
+    mesh_rebuild_pending: bool,
     pub step: u64,
     top_force: [f64; 3],
     bottom_force: [f64; 3],
@@ -199,6 +209,9 @@ impl ShearSim {
             shear_displacement: 0.0,
             bottom_hold: 0.0,
             top_hold: packing.top_y,
+            force_time_velocities: None,
+            ago: 0,
+            mesh_rebuild_pending: false,
             step: 0,
             top_force: [0.0; 3],
             bottom_force: [0.0; 3],
@@ -208,13 +221,18 @@ impl ShearSim {
     /// Starts a new run (LIGGGHTS `run` after changing fixes): the bottom plate's speed, the
     /// servo's reference, a neighbour rebuild, and forces without history update.
     pub fn setup(&mut self, bottom_speed: f64) -> Result<()> {
+        self.setup_plates(bottom_speed);
+        self.rebuild();
+        self.compute_forces(false)
+    }
+
+    /// The plates' part of a run's setup: stage speed, servo reference, mesh origins.
+    fn setup_plates(&mut self, bottom_speed: f64) {
         self.bottom_speed = bottom_speed;
         self.bottom_node_v = 0.0;
         self.servo.setup();
         self.top_base0 = self.top.base_y;
         self.top_orig = self.meshes[1].tris.iter().map(|t| t.nodes).collect();
-        self.rebuild();
-        self.compute_forces(false)
     }
 
     /// Current sample height: distance between the plates' mean surfaces [m].
@@ -323,21 +341,19 @@ impl ShearSim {
                     rot[k] += w[k] * dt;
                 }
             });
-        let d = self.servo.initial_integrate();
-        self.top.base_y = self.top_base0 + d[1];
-        self.meshes[1].place(&self.top_orig, d);
-        self.bottom_node_v = self.bottom_speed;
-        if self.bottom_speed != 0.0 {
-            // MeshMoverLinear: nodes += vel * dt every step
-            let dx = self.bottom_speed * dt;
-            self.meshes[0].translate([dx, 0.0, 0.0]);
-            self.bottom.offset_x += dx;
-            self.shear_displacement += dx;
-        }
-        if self.needs_rebuild() {
+        self.move_plates();
+        if self.decide_rebuild() {
             self.rebuild();
+        } else {
+            // FixMesh::pre_force on a step without rebuild: a plate whose nodes moved more
+            // than skin/2 since the last build asks for a rebuild at the next step
+            self.mesh_rebuild_pending = self.plates_moved();
         }
         self.compute_forces(true)?;
+        if let Some((v, w)) = &mut self.force_time_velocities {
+            v.clone_from(&self.v);
+            w.clone_from(&self.omega);
+        }
         let (radius, mass) = (&self.radius, &self.mass);
         self.x
             .par_iter()
@@ -354,20 +370,53 @@ impl ShearSim {
         Ok(())
     }
 
-    fn needs_rebuild(&self) -> bool {
+    /// The plates' initial_integrate: the servo moves the top plate, `move/mesh linear` the
+    /// bottom one.
+    fn move_plates(&mut self) {
+        let d = self.servo.initial_integrate();
+        self.top.base_y = self.top_base0 + d[1];
+        self.meshes[1].place(&self.top_orig, d);
+        self.bottom_node_v = self.bottom_speed;
+        if self.bottom_speed != 0.0 {
+            // MeshMoverLinear: nodes += vel * dt every step
+            let dx = self.bottom_speed * self.case.dt;
+            self.meshes[0].translate([dx, 0.0, 0.0]);
+            self.bottom.offset_x += dx;
+            self.shear_displacement += dx;
+        }
+    }
+
+    /// `Neighbor::decide` with `delay 0`: a rebuild a plate asked for at the previous step
+    /// (`next_reneighbor`), else every `neighbor.every` steps since the last build, and with
+    /// `check` only if an atom moved more than skin/2 (`check_distance`).
+    fn decide_rebuild(&mut self) -> bool {
+        if self.mesh_rebuild_pending {
+            return true;
+        }
+        self.ago += 1;
+        let sched = &self.case.neighbor;
+        self.ago.is_multiple_of(sched.every) && (!sched.check || self.particles_moved())
+    }
+
+    /// `Neighbor::check_distance`: some atom moved more than skin/2 since the last build.
+    fn particles_moved(&self) -> bool {
         let trigger = 0.5 * self.case.skin;
         let t2 = trigger * trigger;
-        let moved = self
-            .x
+        self.x
             .par_iter()
             .zip(self.xhold.par_iter())
             .with_min_len(LIGHT_CHUNK)
             .any(|(x, h)| {
                 let d = [x[0] - h[0], x[1] - h[1], x[2] - h[2]];
                 d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > t2
-            });
-        moved
-            || (self.bottom.offset_x - self.bottom_hold).abs() > trigger
+            })
+    }
+
+    /// `MultiNodeMesh::decideRebuild` for both plates: a node moved more than skin/2 since the
+    /// last build (every node of a plate moves by the same vector).
+    fn plates_moved(&self) -> bool {
+        let trigger = 0.5 * self.case.skin;
+        (self.bottom.offset_x - self.bottom_hold).abs() > trigger
             || (self.top.base_y - self.top_hold).abs() > trigger
     }
 
@@ -388,15 +437,24 @@ impl ShearSim {
         }
         self.nl
             .build(&self.x, &self.radius, self.case.skin, self.box_);
-        self.meshes[0].wrap_x(lx);
+        self.rebuild_plates();
         self.build_wall_candidates();
         self.xhold.clone_from(&self.x);
-        self.bottom_hold = self.bottom.offset_x;
-        self.top_hold = self.top.base_y;
         self.pair_force
             .resize(self.nl.pairs.len(), Default::default());
         self.pair_damp
             .resize(self.nl.pairs.len(), PairAux::default());
+    }
+
+    /// The plates' part of a rebuild: the bottom mesh's elements wrapped into the box
+    /// (FixMesh::pre_force, `pbcExchangeBorders`), node positions and build counter kept
+    /// for the next decision (`storeNodePosRebuild`, `Neighbor::build` sets `ago = 0`).
+    fn rebuild_plates(&mut self) {
+        self.meshes[0].wrap_x(self.box_.lx);
+        self.ago = 0;
+        self.mesh_rebuild_pending = false;
+        self.bottom_hold = self.bottom.offset_x;
+        self.top_hold = self.top.base_y;
     }
 
     /// Per particle, the (mesh, triangle, image) within reach until the next rebuild: the
@@ -486,35 +544,27 @@ impl ShearSim {
             .with_min_len(HEAVY_CHUNK)
             .for_each(|(p, (out, damp))| {
                 let (i, j) = (p.i as usize, p.j as usize);
-                let xj = [
-                    x[j][0] + p.shift[0],
-                    x[j][1] + p.shift[1],
-                    x[j][2] + p.shift[2],
-                ];
-                let delta = [x[i][0] - xj[0], x[i][1] - xj[1], x[i][2] - xj[2]];
-                let rsq = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
-                let radsum = radius[i] + radius[j];
-                if rsq >= radsum * radsum {
+                let Some(mut cd) = pair_contact(
+                    p,
+                    (x[i], x[j]),
+                    (radius[i], radius[j]),
+                    (mass[i], mass[j]),
+                    (v[i], v[j]),
+                    (omega[i], omega[j]),
+                ) else {
                     *out = Default::default();
                     *damp = PairAux::default();
                     return;
-                }
-                let mut cd = ContactData::pair(
-                    delta,
-                    rsq,
-                    radius[i],
-                    radius[j],
-                    mass[i],
-                    mass[j],
-                    (v[i], v[j]),
-                    (omega[i], omega[j]),
-                );
+                };
                 let (fi, fj, o) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
                 *out = (fi, fj);
+                let ft2 = o.ft[0] * o.ft[0] + o.ft[1] * o.ft[1] + o.ft[2] * o.ft[2];
+                let cap = params.coeff_frict * o.normal.fn_.abs();
                 *damp = PairAux {
                     damping: o.implicit_damping,
                     en: cd.en,
                     contact: if o.rolling_mobilised { 2 } else { 1 },
+                    sliding: ft2 >= cap * cap * (1.0 - 1e-9),
                 };
             });
         // per-particle sums in pair order, then plate contacts
@@ -681,6 +731,9 @@ impl ShearSim {
                             );
                         }
                         slots.rec[slot].hist = hist;
+                        slots.rec[slot].force = fi.delta_f;
+                        slots.rec[slot].torque = fi.delta_torque;
+                        slots.rec[slot].face = hit.face;
                         let before = *f;
                         for c in 0..3 {
                             f[c] += fi.delta_f[c];
@@ -790,6 +843,30 @@ pub fn compact(case: &ShearCase, loose: &Packing, steps: u64) -> Result<Packing>
         sim.step()?;
     }
     Ok(sim.state(loose))
+}
+
+/// The contact data of a listed pair as pair_gran_base.h sets it up (j seen at its image
+/// `x_j + shift`, `delta = x_i - x_j`), or None if the pair does not touch
+/// (`rsq >= radsum^2`).
+pub(crate) fn pair_contact(
+    p: &neighbor::Pair,
+    x: (V3, V3),
+    radius: (f64, f64),
+    mass: (f64, f64),
+    v: (V3, V3),
+    omega: (V3, V3),
+) -> Option<ContactData> {
+    let (xi, xj) = x;
+    let xj = [xj[0] + p.shift[0], xj[1] + p.shift[1], xj[2] + p.shift[2]];
+    let delta = [xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]];
+    let rsq = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
+    let radsum = radius.0 + radius.1;
+    if rsq >= radsum * radsum {
+        return None;
+    }
+    Some(ContactData::pair(
+        delta, rsq, radius.0, radius.1, mass.0, mass.1, v, omega,
+    ))
 }
 
 /// Squared distance from `p` to the axis-aligned bounding box of a triangle shifted by `s`.
