@@ -79,6 +79,10 @@ pub struct ShearArgs {
     /// Particle count (the preset's box is scaled in x and z to keep the sample height).
     #[arg(long)]
     pub particles: Option<usize>,
+    /// Coefficient of normal restitution (the paper's Table 2: 1, no normal damping; the
+    /// presets still use 0.5). LIGGGHTS accepts 0.05 < e <= 1.
+    #[arg(long)]
+    pub restitution: Option<f64>,
     /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (their 95 % CIs must
     /// also overlap). The default suits 3 seeds of 2500 particles; one seed of the ci preset
     /// fluctuates more (seed-to-seed spread about 0.03).
@@ -158,6 +162,17 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
     }
     if a.snapshot_every > 0 {
         c.snapshot_every = a.snapshot_every;
+    }
+    if let Some(e) = a.restitution {
+        if !(e.is_finite() && e > 0.05 && e <= 1.0) {
+            return Err(Error::invalid(
+                "--restitution",
+                e,
+                "0.05 < e <= 1 (LIGGGHTS' range)",
+            ));
+        }
+        c.material.restitution = e;
+        c.name = format!("{}_e{e}", c.name).replace('.', "p");
     }
     if a.flat_plates {
         c.plates = crate::spec::shear::Plates::Flat;

@@ -210,6 +210,18 @@ impl TriMesh {
         }
     }
 
+    /// Recomputes every triangle's edge vectors, edge lengths and normal from its current
+    /// nodes, as LIGGGHTS does at every rebuild and setup (`refreshOwned` ->
+    /// `recalcLocalSurfProperties`: `calcEdgeVecLen`, `calcSurfaceNorm`). A moving mesh's
+    /// nodes carry the rounding of their motion, so these differ in the last bits from the
+    /// values computed from the STL nodes; centres and bounding radii are kept (recomputed
+    /// only for deforming meshes).
+    pub fn refresh_surface_properties(&mut self) {
+        for t in &mut self.tris {
+            *t = Triangle::new(t.nodes);
+        }
+    }
+
     /// Translates every triangle by `d` (LIGGGHTS `move`: nodes and centres incremented).
     pub fn translate(&mut self, d: V3) {
         for (t, c) in self.tris.iter_mut().zip(self.center.iter_mut()) {

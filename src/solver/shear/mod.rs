@@ -447,10 +447,14 @@ impl ShearSim {
     }
 
     /// The plates' part of a rebuild: the bottom mesh's elements wrapped into the box
-    /// (FixMesh::pre_force, `pbcExchangeBorders`), node positions and build counter kept
+    /// (FixMesh::pre_force, `pbcExchangeBorders`), the surface properties recomputed from the
+    /// moved nodes (`refreshOwned`), node positions and build counter kept
     /// for the next decision (`storeNodePosRebuild`, `Neighbor::build` sets `ago = 0`).
     fn rebuild_plates(&mut self) {
         self.meshes[0].wrap_x(self.box_.lx);
+        for m in &mut self.meshes {
+            m.refresh_surface_properties();
+        }
         self.ago = 0;
         self.mesh_rebuild_pending = false;
         self.bottom_hold = self.bottom.offset_x;
@@ -711,10 +715,13 @@ impl ShearSim {
                         };
                         if debug_wall {
                             eprintln!(
-                                "wall p {} mesh {m} tri {tri} img {img} face {} d {:e}",
+                                "wall p {} mesh {m} tri {tri} img {img} face {} d {:e} cp {:e} {:e} {:e}",
                                 q + 1,
                                 hit.face,
-                                hit.d
+                                hit.d,
+                                x[q][0] + hit.delta[0],
+                                x[q][1] + hit.delta[1],
+                                x[q][2] + hit.delta[2]
                             );
                         }
                         let mut hist = slots.rec[slot].hist;
