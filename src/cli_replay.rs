@@ -114,15 +114,7 @@ pub fn request(a: &ReplayArgs) -> Result<ReplayRequest> {
     };
     let mut case = ShearCase::preset(preset, rolling, a.mu_r, a.eta_r, a.seed)?;
     if let Some(e) = a.restitution {
-        if !(e.is_finite() && e > 0.05 && e <= 1.0) {
-            return Err(Error::invalid(
-                "--restitution",
-                e,
-                "0.05 < e <= 1 (LIGGGHTS' range)",
-            ));
-        }
-        case.material.restitution = e;
-        case.name = format!("{}_e{}", case.name, e).replace('.', "p");
+        case = case.with_restitution("--restitution", e)?;
     }
     let states = match &a.at {
         Some(v) => v.clone(),

@@ -164,15 +164,7 @@ pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> 
         c.snapshot_every = a.snapshot_every;
     }
     if let Some(e) = a.restitution {
-        if !(e.is_finite() && e > 0.05 && e <= 1.0) {
-            return Err(Error::invalid(
-                "--restitution",
-                e,
-                "0.05 < e <= 1 (LIGGGHTS' range)",
-            ));
-        }
-        c.material.restitution = e;
-        c.name = format!("{}_e{e}", c.name).replace('.', "p");
+        c = c.with_restitution("--restitution", e)?;
     }
     if a.flat_plates {
         c.plates = crate::spec::shear::Plates::Flat;
@@ -391,6 +383,8 @@ pub struct ShearSummary {
     pub native: Option<Steady>,
     pub seeds: Vec<SeedResult>,
     pub results: Vec<crate::compare::ChannelResult>,
+    /// Per-seed steady mu, native - LIGGGHTS (both codes ran every seed).
+    pub paired_dmu: Option<crate::compare::Paired>,
     pub liggghts_version: String,
     pub date_utc: String,
 }
@@ -675,6 +669,10 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         native: ns.clone(),
         seeds,
         results,
+        paired_dmu: match (&ls, &ns) {
+            (Some(l), Some(n)) => crate::compare::paired(&l.per_seed_mu, &n.per_seed_mu),
+            _ => None,
+        },
         liggghts_version: lig
             .as_ref()
             .map(|l| l.version())
@@ -709,6 +707,17 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
                     .join(", ")
             );
         }
+    }
+    if let Some(p) = &summary.paired_dmu {
+        say!(
+            "  paired (native - LIGGGHTS, same seeds): {:+.4} +- {:.4} (95 % CI, {} seeds), t = {:.2}, native higher in {} of {}",
+            p.mean,
+            p.ci95,
+            p.n,
+            p.t,
+            p.b_higher,
+            p.n
+        );
     }
     for r in &summary.results {
         say!(

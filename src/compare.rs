@@ -191,35 +191,33 @@ pub fn lockstep(a: &Series, b: &Series, channels: &[&str], rtol: f64) -> Horizon
         })
         .collect();
     let n = a.rows.len().min(b.rows.len());
-    let peaks: Vec<f64> = chans
-        .iter()
-        .map(|ch| {
-            (0..n)
-                .map(|k| {
-                    let na: f64 = ch
-                        .cols
-                        .iter()
-                        .map(|&c| a.rows[k][c].powi(2))
-                        .sum::<f64>()
-                        .sqrt();
-                    let nb: f64 = ch
-                        .cols
-                        .iter()
-                        .map(|&c| b.rows[k][c].powi(2))
-                        .sum::<f64>()
-                        .sqrt();
-                    na.max(nb)
-                })
-                .fold(0.0, f64::max)
-        })
-        .collect();
+    let norm = |s: &Series, k: usize, ch: &crate::series::Channel| -> f64 {
+        ch.cols
+            .iter()
+            .map(|&c| s.rows[k][c].powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    // Each channel's scale is its peak *so far* (both codes, steps up to the current one): a
+    // later blow-up must not loosen the tolerance of earlier steps.
+    let mut peaks = vec![0.0f64; chans.len()];
     let mut last = a.steps.first().copied().unwrap_or(0);
+    let diverge = |last: u64, step: u64, channel: &str| Horizon {
+        last_agree_step: last,
+        first_diverge_step: Some(step),
+        first_diverge_channel: Some(channel.to_string()),
+        rtol,
+    };
     for k in 0..n {
+        if a.steps[k] != b.steps[k] {
+            // misaligned outputs are not agreement
+            return diverge(last, a.steps[k].min(b.steps[k]), "step");
+        }
         if a.steps[k] == 0 {
             continue;
         }
-        if a.steps[k] != b.steps[k] {
-            break;
+        for (ch, peak) in chans.iter().zip(peaks.iter_mut()) {
+            *peak = peak.max(norm(a, k, ch)).max(norm(b, k, ch));
         }
         for (ch, peak) in chans.iter().zip(&peaks) {
             let worst = ch
@@ -229,15 +227,15 @@ pub fn lockstep(a: &Series, b: &Series, channels: &[&str], rtol: f64) -> Horizon
                 .fold(0.0, f64::max);
             // NaN compares false: a NaN difference is a divergence
             if worst.is_nan() || worst > rtol * peak {
-                return Horizon {
-                    last_agree_step: last,
-                    first_diverge_step: Some(a.steps[k]),
-                    first_diverge_channel: Some(ch.name.clone()),
-                    rtol,
-                };
+                return diverge(last, a.steps[k], &ch.name);
             }
         }
         last = a.steps[k];
+    }
+    if a.rows.len() != b.rows.len() {
+        // one run stopped earlier: its missing outputs are not agreement
+        let longer = if a.rows.len() > b.rows.len() { a } else { b };
+        return diverge(last, longer.steps[n], "missing rows");
     }
     Horizon {
         last_agree_step: last,
@@ -273,6 +271,44 @@ pub fn mean_ci95(x: &[f64]) -> (f64, f64) {
     }
     let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
     (mean, t95(n - 1) * (var / n as f64).sqrt())
+}
+
+/// Paired difference of two codes over the same seeds (`b - a` per seed): the seeds share
+/// their initial packings, so the seed-to-seed spread cancels and a code difference far below
+/// it becomes visible.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct Paired {
+    pub n: usize,
+    pub mean: f64,
+    /// 95 % CI half-width of the mean difference (t distribution, n - 1 dof).
+    pub ci95: f64,
+    /// mean / standard error (NaN below 2 seeds).
+    pub t: f64,
+    /// Seeds where b > a.
+    pub b_higher: usize,
+}
+
+/// See [`Paired`]; None when the lengths differ or there are no seeds.
+pub fn paired(a: &[f64], b: &[f64]) -> Option<Paired> {
+    if a.len() != b.len() || a.is_empty() {
+        return None;
+    }
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| y - x).collect();
+    let (mean, ci95) = mean_ci95(&d);
+    let n = d.len();
+    let t = if n > 1 {
+        let var = d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+        mean / (var / n as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    Some(Paired {
+        n,
+        mean,
+        ci95,
+        t,
+        b_higher: d.iter().filter(|v| **v > 0.0).count(),
+    })
 }
 
 /// 95 % CI half-width of the mean of a time series from 10 block means (what one seed offers:
@@ -377,6 +413,43 @@ mod shear_tests {
         let h = lockstep(&c, &d, &["top_y", "mu"], 1e-6);
         assert_eq!(h.first_diverge_step, Some(30));
         assert_eq!(h.first_diverge_channel.as_deref(), Some("top_y"));
+    }
+
+    #[test]
+    fn paired_difference_cancels_the_seed_spread() {
+        let a = [0.50, 0.60, 0.40, 0.55];
+        let b = [0.52, 0.61, 0.43, 0.56];
+        let p = paired(&a, &b).unwrap();
+        assert!((p.mean - 0.0175).abs() < 1e-12);
+        assert_eq!((p.n, p.b_higher), (4, 4));
+        // sd of the differences 0.00957, se 0.00479, t = 3.66, ci = 3.182 se
+        assert!((p.t - 3.656).abs() < 1e-2, "{p:?}");
+        assert!((p.ci95 - 3.182 * 0.009574 / 2.0).abs() < 1e-4, "{p:?}");
+        assert!(paired(&a, &b[..3]).is_none());
+    }
+
+    #[test]
+    fn late_blow_up_does_not_loosen_early_steps_and_gaps_are_divergence() {
+        // a 1e-4 relative difference at step 10, then a blow-up to 1e6 at step 30: with the
+        // whole-run peak the early difference would pass at rtol 1e-6 (1e-4 < 1e-6 * 1e6)
+        let a = s(&[1.0, 1.0, 1.0, 1e6]);
+        let mut b = a.clone();
+        b.rows[1][0] = 1.0 + 1e-4;
+        let h = lockstep(&a, &b, &["top_f"], 1e-6);
+        assert_eq!(h.first_diverge_step, Some(10));
+        // misaligned steps end the agreement there
+        let mut c = a.clone();
+        c.steps[2] = 25;
+        let h = lockstep(&a, &c, &["top_f"], 1e-6);
+        assert_eq!((h.last_agree_step, h.first_diverge_step), (10, Some(20)));
+        assert_eq!(h.first_diverge_channel.as_deref(), Some("step"));
+        // a run that stopped early does not agree to the end
+        let mut d = a.clone();
+        d.steps.truncate(2);
+        d.rows.truncate(2);
+        let h = lockstep(&a, &d, &["top_f"], 1e-6);
+        assert_eq!((h.last_agree_step, h.first_diverge_step), (10, Some(20)));
+        assert_eq!(h.first_diverge_channel.as_deref(), Some("missing rows"));
     }
 
     #[test]

@@ -553,78 +553,94 @@ fn compare(a: &Side, b: &Side) -> Vec<ChannelError> {
         acc.peak = acc.peak.max(floor);
         out.push(acc.finish(name));
     }
-    let mut missing = 0usize;
-    let mut missing_item = String::new();
-    let mut chans: [Acc; 4] = Default::default();
-    for (k, ea) in &a.pairs {
-        let Some(eb) = b.pairs.get(k) else {
-            missing += 1;
-            missing_item = format!("pair {}-{} ({})", k.0 + 1, k.1 + 1, ea.3);
-            continue;
-        };
-        let item = || format!("pair {}-{} ({})", k.0 + 1, k.1 + 1, ea.3);
-        chans[0].add(ea.0, eb.0, item);
-        chans[1].add(ea.1, eb.1, item);
-        chans[2].add(ea.2.shear, eb.2.shear, item);
-        chans[3].add(ea.2.r_torque, eb.2.r_torque, item);
-    }
-    for (k, eb) in &b.pairs {
-        if !a.pairs.contains_key(k) {
-            missing += 1;
-            missing_item = format!("pair {}-{} ({})", k.0 + 1, k.1 + 1, eb.3);
-        }
-    }
-    for (c, name) in chans.into_iter().zip([
-        "pair_force",
-        "pair_torque",
-        "pair_shear_hist",
-        "pair_roll_hist",
-    ]) {
-        out.push(c.finish(name));
-    }
-    let mut wchans: [Acc; 4] = Default::default();
-    for (k, ea) in &a.walls {
-        let Some(eb) = b.walls.get(k) else {
-            missing += 1;
-            missing_item = format!("atom {} mesh {} tri {} ({})", k.0 + 1, k.1, k.2, ea.3);
-            continue;
-        };
-        let item = || format!("atom {} mesh {} tri {} ({})", k.0 + 1, k.1, k.2, ea.3);
-        wchans[0].add(ea.0, eb.0, item);
-        wchans[1].add(ea.1, eb.1, item);
-        wchans[2].add(ea.2.shear, eb.2.shear, item);
-        wchans[3].add(ea.2.r_torque, eb.2.r_torque, item);
-    }
-    for (k, eb) in &b.walls {
-        if !a.walls.contains_key(k) {
-            missing += 1;
-            missing_item = format!("atom {} mesh {} tri {} ({})", k.0 + 1, k.1, k.2, eb.3);
-        }
-    }
-    for (c, name) in wchans.into_iter().zip([
-        "wall_force",
-        "wall_torque",
-        "wall_shear_hist",
-        "wall_roll_hist",
-    ]) {
-        out.push(c.finish(name));
-    }
+    let mut missing = (0usize, String::new());
+    contact_channels(
+        &a.pairs,
+        &b.pairs,
+        "pair",
+        |k, kind| format!("pair {}-{} ({kind})", k.0 + 1, k.1 + 1),
+        &mut missing,
+        &mut out,
+    );
+    contact_channels(
+        &a.walls,
+        &b.walls,
+        "wall",
+        |k, kind| format!("atom {} mesh {} tri {} ({kind})", k.0 + 1, k.1, k.2),
+        &mut missing,
+        &mut out,
+    );
     let mut plates = Acc::default();
     plates.add(a.top, b.top, || "top plate".into());
     plates.add(a.bottom, b.bottom, || "bottom plate".into());
     out.push(plates.finish("plate_force"));
     out.push(ChannelError {
         channel: "contact_set".into(),
-        max_rel_err: missing as f64,
+        max_rel_err: missing.0 as f64,
         peak: 1.0,
-        worst: missing_item,
+        worst: missing.1,
     });
     out
 }
 
+/// Force, torque, shear and rolling history of the contacts both sides hold (`<what>_force`,
+/// ...); a contact held by one side only is counted in `missing` (count, last item).
+fn contact_channels<K: std::hash::Hash + Eq>(
+    a: &HashMap<K, ContactValues>,
+    b: &HashMap<K, ContactValues>,
+    what: &str,
+    name: impl Fn(&K, &str) -> String,
+    missing: &mut (usize, String),
+    out: &mut Vec<ChannelError>,
+) {
+    let mut chans: [Acc; 4] = Default::default();
+    for (k, ea) in a {
+        let Some(eb) = b.get(k) else {
+            *missing = (missing.0 + 1, name(k, &ea.3));
+            continue;
+        };
+        let item = || name(k, &ea.3);
+        chans[0].add(ea.0, eb.0, item);
+        chans[1].add(ea.1, eb.1, item);
+        chans[2].add(ea.2.shear, eb.2.shear, item);
+        chans[3].add(ea.2.r_torque, eb.2.r_torque, item);
+    }
+    for (k, eb) in b {
+        if !a.contains_key(k) {
+            *missing = (missing.0 + 1, name(k, &eb.3));
+        }
+    }
+    for (c, suffix) in chans
+        .into_iter()
+        .zip(["force", "torque", "shear_hist", "roll_hist"])
+    {
+        out.push(c.finish(&format!("{what}_{suffix}")));
+    }
+}
+
+/// Channels that decide: what the force computation produces from the recorded state
+/// (particle forces and torques, every contact's force, torque and history, plate forces, the
+/// contact set). Positions, velocities and angular velocities are reported, not judged: after
+/// a step they carry the force round-off divided by the mass, which for a slow particle is a
+/// large fraction of its own small velocity.
+pub const JUDGED: [&str; 12] = [
+    "f",
+    "torque",
+    "pair_force",
+    "pair_torque",
+    "pair_shear_hist",
+    "pair_roll_hist",
+    "wall_force",
+    "wall_torque",
+    "wall_shear_hist",
+    "wall_roll_hist",
+    "plate_force",
+    "contact_set",
+];
+
 fn worst(ch: &[ChannelError]) -> ChannelError {
     ch.iter()
-        .filter(|c| c.max_rel_err.is_finite() || c.max_rel_err.is_infinite())
+        .filter(|c| JUDGED.contains(&c.channel.as_str()))
         .max_by(|a, b| a.max_rel_err.total_cmp(&b.max_rel_err))
         .cloned()
         .unwrap_or_default()

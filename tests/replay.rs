@@ -1,11 +1,12 @@
 //! `verify replay` against live LIGGGHTS: the native solver restarted from LIGGGHTS' recorded
 //! dense states (histories included) must reproduce LIGGGHTS' next steps contact by contact.
-//! ci preset, windows in the compacted gouge, every rolling model, restitution 1 (the paper's)
-//! and 0.5, (mu_r, eta_r) = (0.5, 0) and, for the models with a dashpot, (0.5, 0.5).
+//! ci preset, three windows in the compacting gouge and three in the first 20,000 shear steps,
+//! every rolling model, restitution 1 (the paper's) and 0.5, (mu_r, eta_r) = (0.5, 0) and, for
+//! the models with a dashpot, (0.5, 0.5).
 
 mod common;
 
-use dem_verify::replay::{run, ReplayOutcome, ReplayRequest};
+use dem_verify::replay::{default_states, run, ReplayOutcome, ReplayRequest};
 use dem_verify::spec::shear::ShearCase;
 use dem_verify::spec::RollingModel;
 
@@ -16,9 +17,10 @@ fn replay(rolling: RollingModel, mu_r: f64, eta_r: f64, e: f64) -> ReplayOutcome
         "replay-test-{}-{mu_r}-{eta_r}-{e}",
         rolling.keyword()
     ));
+    let states = default_states(&case, 6, 12, 20_000);
     let req = ReplayRequest {
         case,
-        states: vec![7500, 9000, 10500],
+        states,
         steps: 12,
         rtol: 1e-12,
         out: out.clone(),
@@ -35,7 +37,19 @@ fn replay(rolling: RollingModel, mu_r: f64, eta_r: f64, e: f64) -> ReplayOutcome
 
 fn check(o: &ReplayOutcome) {
     let table = dem_verify::replay::table(o);
-    assert_eq!(o.windows.len(), 3, "{table}");
+    assert_eq!(o.windows.len(), 6, "{table}");
+    let phases: Vec<&str> = o.windows.iter().map(|w| w.phase.as_str()).collect();
+    assert_eq!(
+        phases,
+        [
+            "compaction",
+            "compaction",
+            "compaction",
+            "shear",
+            "shear",
+            "shear"
+        ]
+    );
     for w in &o.windows {
         assert_eq!(w.steps.len(), 12, "{table}");
         let s1 = &w.steps[0];
@@ -56,6 +70,17 @@ fn check(o: &ReplayOutcome) {
             "{c:?}"
         );
         assert!(c.rebuilds >= 1, "every window crosses a rebuild: {c:?}");
+        // the step-1 comparison is complete: every channel compared something
+        for ch in &s1.channels {
+            if !ch.channel.ends_with("roll_hist") || (o.rolling.starts_with("epsd") && o.mu_r > 0.0)
+            {
+                assert!(
+                    ch.peak > 0.0 || ch.channel == "contact_set",
+                    "{} compared nothing: {table}",
+                    ch.channel
+                );
+            }
+        }
         if o.rolling != "off" && o.mu_r > 0.0 {
             assert!(c.rolling_limit_pairs > 0, "{c:?}");
         }

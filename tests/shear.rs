@@ -23,6 +23,13 @@ fn ci_preset_agrees_with_liggghts() {
         "0.5",
         "--preset",
         "ci",
+        // The statistical resolution of 3 seeds of 300 particles: over 9 paired seeds at
+        // (0.5, 0.5) the per-seed difference native - LIGGGHTS had mean +0.014 and standard
+        // deviation 0.043 (2026-12-01), so the mean of 3 seeds scatters by 0.025 around zero;
+        // the default 0.02 (meant for 2500 particles) failed by chance on seeds 1-3 (0.032).
+        // Contact-level agreement is held by tests/replay.rs (1e-13 at step 1).
+        "--mu-atol",
+        "0.06",
         "--out",
         out.to_str().unwrap(),
     ]);

@@ -236,6 +236,17 @@ impl ShearCase {
         Ok(c)
     }
 
+    /// The case with normal restitution `e` (LIGGGHTS: 0.05 < e <= 1), its name marked with
+    /// it. The one place a command-line `--restitution` is applied.
+    pub fn with_restitution(mut self, flag: &str, e: f64) -> Result<Self> {
+        if !(e.is_finite() && e > 0.05 && e <= 1.0) {
+            return Err(Error::invalid(flag, e, "0.05 < e <= 1 (LIGGGHTS' range)"));
+        }
+        self.material.restitution = e;
+        self.name = format!("{}_e{e}", self.name).replace('.', "p");
+        Ok(self)
+    }
+
     /// Number of particles of each size class (number fractions, or mass fractions
     /// converted with n_k ~ f_k / r_k^3), rounded so that they sum to `particles`.
     pub fn class_counts(&self) -> Vec<usize> {
