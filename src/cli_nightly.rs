@@ -48,6 +48,9 @@ pub const SHEAR_POINTS: [(f64, f64, &str); 5] = [
     (0.5, 0.0, "epsd2"),
 ];
 
+/// Seeds per shear point in a full night (paired: the same packings in both codes).
+pub const FULL_SEEDS: u64 = 6;
+
 /// Wall-time budget of a full night on the 2-core reference machine [s].
 pub const FULL_BUDGET_S: f64 = 3.0 * 3600.0;
 
@@ -189,7 +192,24 @@ pub struct ShearRow {
     /// Explicit rolling dashpot stable at this dt, and the worst stability line.
     pub dashpot_stable: Option<bool>,
     pub worst_stability: Option<String>,
+    /// Per-seed steady mu, native - LIGGGHTS over the same seeds.
+    pub paired_dmu: Option<crate::compare::Paired>,
+    /// `verify replay` of the same point (seed 1): the codes contact by contact.
+    pub replay: Option<ReplayRow>,
     pub dir: String,
+}
+
+/// The replay of a nightly shear point, in one line.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplayRow {
+    pub pass: bool,
+    pub windows: usize,
+    pub steps: u64,
+    /// Largest step-1 error over the windows (judged channels) and its limit.
+    pub worst_step1: f64,
+    pub rtol: f64,
+    /// Shortest horizon over the windows [steps].
+    pub min_horizon: u64,
 }
 
 /// `DIR/summary.json` of `verify nightly` (schema in the README).
@@ -241,7 +261,7 @@ pub fn nightly(a: NightlyArgs) -> Result<Outcome> {
     let contact = contact_night(&a, &lig)?;
     let shear: Vec<ShearRow> = SHEAR_POINTS
         .iter()
-        .map(|&(mu_r, eta_r, rolling)| shear_night(&a, mu_r, eta_r, rolling))
+        .map(|&(mu_r, eta_r, rolling)| shear_night(&a, &lig, mu_r, eta_r, rolling))
         .collect();
     let errors: Vec<String> = contact
         .iter()
@@ -372,7 +392,7 @@ fn shear_dir(mu_r: f64, eta_r: f64, rolling: &str) -> String {
 }
 
 /// One shear case of the night (errors are kept in the row, the night goes on).
-fn shear_night(a: &NightlyArgs, mu_r: f64, eta_r: f64, rolling: &str) -> ShearRow {
+fn shear_night(a: &NightlyArgs, lig: &Liggghts, mu_r: f64, eta_r: f64, rolling: &str) -> ShearRow {
     let preset = if a.quick { "ci" } else { "fast" };
     let dir = shear_dir(mu_r, eta_r, rolling);
     let args = ShearArgs {
@@ -380,7 +400,7 @@ fn shear_night(a: &NightlyArgs, mu_r: f64, eta_r: f64, rolling: &str) -> ShearRo
         eta_r,
         rolling: rolling.into(),
         preset: preset.into(),
-        seeds: if a.quick { 1 } else { 3 },
+        seeds: if a.quick { 1 } else { FULL_SEEDS },
         out: Some(a.out.join(&dir)),
         mu_atol: if a.quick { QUICK_MU_ATOL } else { MU_ATOL },
         stress_rtol: if a.quick {
@@ -411,6 +431,8 @@ fn shear_night(a: &NightlyArgs, mu_r: f64, eta_r: f64, rolling: &str) -> ShearRo
         chaos_baseline_steps: None,
         dashpot_stable: None,
         worst_stability: None,
+        paired_dmu: None,
+        replay: None,
         dir,
     };
     println!("\n== shear {} ==", row.name);
@@ -418,7 +440,80 @@ fn shear_night(a: &NightlyArgs, mu_r: f64, eta_r: f64, rolling: &str) -> ShearRo
         Ok(()) => {}
         Err(e) => row.error = Some(e.to_string()),
     }
+    println!("\n== replay {} ==", row.name);
+    match replay_night(a, lig, preset, mu_r, eta_r, rolling, &row.dir) {
+        Ok(r) => {
+            row.pass &= r.pass;
+            row.replay = Some(r);
+        }
+        Err(e) => {
+            let msg = format!("replay: {e}");
+            row.error = Some(match row.error.take() {
+                Some(prev) => format!("{prev}; {msg}"),
+                None => msg,
+            });
+        }
+    }
     row
+}
+
+/// `verify replay` of a nightly point: seed 1, windows in compaction and early shear (a stored
+/// outcome of the same case and windows is reused, so a resumed night does not redo it).
+fn replay_night(
+    a: &NightlyArgs,
+    lig: &Liggghts,
+    preset: &str,
+    mu_r: f64,
+    eta_r: f64,
+    rolling: &str,
+    dir: &str,
+) -> Result<ReplayRow> {
+    use crate::replay::{default_states, run, ReplayOutcome, ReplayRequest};
+    let case = crate::spec::shear::ShearCase::preset(
+        preset,
+        crate::spec::RollingModel::parse(rolling)?,
+        mu_r,
+        eta_r,
+        1,
+    )?;
+    let steps = 12;
+    let states = default_states(&case, if a.quick { 4 } else { 6 }, steps, 20_000);
+    let out = a.out.join(dir).join("replay");
+    let stored = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<ReplayOutcome>(&t).ok())
+        .filter(|o| {
+            o.case == case.name
+                && o.windows.len() == states.len()
+                && o.windows.iter().all(|w| w.steps.len() as u64 == steps)
+        });
+    let o = match stored {
+        Some(o) => o,
+        None => {
+            std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+            let req = ReplayRequest {
+                case,
+                states,
+                steps,
+                rtol: crate::replay::STEP1_RTOL,
+                out,
+            };
+            run(&req, lig, |m| println!("  {m}"))?
+        }
+    };
+    print!("{}", crate::replay::table(&o));
+    Ok(ReplayRow {
+        pass: o.pass,
+        windows: o.windows.len(),
+        steps,
+        worst_step1: o
+            .windows
+            .iter()
+            .map(|w| w.steps[0].max_rel_err)
+            .fold(0.0, f64::max),
+        rtol: o.rtol,
+        min_horizon: o.windows.iter().map(|w| w.horizon).min().unwrap_or(0),
+    })
 }
 
 fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<()> {
@@ -435,6 +530,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary, night: &Path) -> Result<
     if let (Some(l), Some(n)) = (&s.liggghts, &s.native) {
         row.ci_overlap = Some((l.mu - n.mu).abs() <= l.mu_ci95 + n.mu_ci95);
     }
+    row.paired_dmu = s.paired_dmu.clone();
     let lock = |f: &dyn Fn(&crate::cli_shear::SeedResult) -> Option<u64>| {
         s.seeds.iter().map(f).collect::<Option<Vec<u64>>>()
     };
@@ -842,6 +938,26 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
     ));
     if let Some(e) = &r.error {
         p.html(&format!("<pre class=\"fail\">{}</pre>", escape(e)));
+    }
+    if let Some(rp) = &r.replay {
+        let (st, class) = status(rp.pass, &None);
+        p.html(&format!(
+            "<p>Contact by contact (<code>verify replay</code>, seed 1): {} windows of {} steps \
+             from LIGGGHTS' recorded states, worst step-1 error {} (limit {}), shortest horizon \
+             {} steps: <span class=\"{class}\">{st}</span>.</p>",
+            rp.windows,
+            rp.steps,
+            sci(rp.worst_step1),
+            sci(rp.rtol),
+            rp.min_horizon
+        ));
+    }
+    if let Some(pd) = &r.paired_dmu {
+        p.html(&format!(
+            "<p>Paired over the same seeds, native − LIGGGHTS: {:+.4} ± {:.4} (95 % CI, {} seeds), \
+             t = {:.2}, native higher in {} of {}.</p>",
+            pd.mean, pd.ci95, pd.n, pd.t, pd.b_higher, pd.n
+        ));
     }
     let mut rows = Vec::new();
     for (code, c) in [("LIGGGHTS", &r.liggghts), ("native", &r.native)] {

@@ -75,7 +75,7 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 20_000)]
     pub shear_span: u64,
     /// Step-1 tolerance: max |error| / channel peak.
-    #[arg(long, default_value_t = 1e-12)]
+    #[arg(long, default_value_t = crate::replay::STEP1_RTOL)]
     pub rtol: f64,
     /// Output directory (default: a new directory under ./runs/).
     #[arg(long)]

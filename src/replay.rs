@@ -40,6 +40,9 @@ pub const SCHEMA: u32 = 1;
 /// mesh's wrap steps) from the plates alone. Plates still force rebuilds as in production.
 pub const REPLAY_NEIGHBOR_EVERY: u64 = 10;
 
+/// Step-1 tolerance: only the order of force summation differs.
+pub const STEP1_RTOL: f64 = 1e-12;
+
 /// Later steps agree if their error is within this factor of the chaos envelope.
 pub const CHAOS_FACTOR: f64 = 100.0;
 
@@ -623,18 +626,34 @@ fn contact_channels<K: std::hash::Hash + Eq>(
 /// contact set). Positions, velocities and angular velocities are reported, not judged: after
 /// a step they carry the force round-off divided by the mass, which for a slow particle is a
 /// large fraction of its own small velocity.
-pub const JUDGED: [&str; 12] = [
+///
+/// The contacts' own forces and torques (`pair_force`, ...) are what LIGGGHTS' computes report:
+/// re-evaluations at the end of the step. Evaluated on the native state they carry its
+/// velocity round-off, which cdt's torque direction `wr / |wr|` amplifies without bound near
+/// rolling reversal; so they are reported, and judged as `kernel_*`: the native kernels
+/// evaluated on LIGGGHTS' own recorded state of the same step (same inputs).
+pub const JUDGED: [&str; 13] = [
     "f",
     "torque",
-    "pair_force",
-    "pair_torque",
     "pair_shear_hist",
     "pair_roll_hist",
-    "wall_force",
-    "wall_torque",
     "wall_shear_hist",
     "wall_roll_hist",
     "plate_force",
+    "contact_set",
+    "kernel_pair_force",
+    "kernel_pair_torque",
+    "kernel_wall_force",
+    "kernel_wall_torque",
+    "kernel_contact_set",
+];
+
+/// Channels of the kernel check (see [`JUDGED`]).
+const KERNEL: [&str; 5] = [
+    "pair_force",
+    "pair_torque",
+    "wall_force",
+    "wall_torque",
     "contact_set",
 ];
 
@@ -787,6 +806,9 @@ fn replay_window<'a>(
     let mut sim = plates.clone_for_observation();
     sim.load_recorded(&d0.state)?;
     sim.keep_force_time_velocities();
+    // the plates as LIGGGHTS moved them, for the kernel check on LIGGGHTS' own states
+    let mut lig_plates = plates.clone_for_observation();
+    let mut prev_state = d0.state.clone();
     let mut twin = sim.clone_for_observation();
     twin.x[0][0] = next_up(twin.x[0][0]);
     let mut cov = Coverage::default();
@@ -804,7 +826,23 @@ fn replay_window<'a>(
         let nat = native_side(&sim, &d.pairs)?;
         let lig = liggghts_side(&d, row(step)?, &nat);
         let tw = native_side(&twin, &d.pairs)?;
-        let ch = compare(&lig, &nat);
+        let mut ch = compare(&lig, &nat);
+        // kernel check: the native contact kernels on LIGGGHTS' own state of this step give
+        // LIGGGHTS' contact forces and torques (same inputs, same operations)
+        lig_plates.step_plates_only(v3(row(step)?, 0))?;
+        let mut probe = lig_plates.clone_for_observation();
+        probe.load_recorded(&d.state)?;
+        probe.set_force_time_velocities_from(&prev_state);
+        let kernel = native_side(&probe, &d.pairs)?;
+        for c in compare(&lig, &kernel) {
+            if KERNEL.contains(&c.channel.as_str()) {
+                ch.push(ChannelError {
+                    channel: format!("kernel_{}", c.channel),
+                    ..c
+                });
+            }
+        }
+        prev_state = d.state;
         let chaos = worst(&compare(&tw, &nat)).max_rel_err;
         let w = worst(&ch);
         let limit = if steps.is_empty() {

@@ -91,6 +91,12 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
             assert!(r[code]["erot"].as_f64().unwrap() > 0.0);
         }
         assert!(r["lockstep_steps"].as_u64().unwrap() > 10, "{r}");
+        // every shear point is also replayed contact by contact, and agrees
+        let rp = &r["replay"];
+        assert_eq!(rp["pass"], true, "{r}");
+        assert_eq!(rp["windows"].as_u64(), Some(4), "{r}");
+        assert!(rp["worst_step1"].as_f64().unwrap() <= 1e-12, "{r}");
+        assert_eq!(rp["min_horizon"].as_u64(), Some(12), "{r}");
     }
     // the paper's point with the unstable explicit dashpot is flagged
     let unstable: Vec<&str> = shear

@@ -90,13 +90,9 @@ fn check(o: &ReplayOutcome) {
             .find(|c| c.channel == "contact_set")
             .unwrap();
         assert_eq!(missing.max_rel_err, 0.0, "{table}");
-        if o.rolling != "cdt" {
-            assert!(w.pass, "{table}");
-        }
+        assert!(w.pass, "{table}");
     }
-    if o.rolling != "cdt" {
-        assert!(o.pass, "{table}");
-    }
+    assert!(o.pass, "{table}");
 }
 
 #[test]

@@ -106,6 +106,28 @@ impl ShearSim {
         Ok(())
     }
 
+    /// Sets the force-time velocities from a recorded state one step earlier: the half-kick
+    /// `v + dtf f / m`, `omega + dtf/(0.4 m r^2) torque` of nve/sphere's initial_integrate,
+    /// what LIGGGHTS' ghost atoms hold at a dump (for [`ShearSim::observe_contacts`]).
+    pub fn set_force_time_velocities_from(&mut self, prev: &RecordedState) {
+        let nve = self.nve;
+        let mut v = prev.v.clone();
+        let mut w = prev.omega.clone();
+        for i in 0..v.len() {
+            let mut x = prev.x[i];
+            nve.initial(
+                &mut x,
+                &mut v[i],
+                &mut w[i],
+                prev.f[i],
+                prev.torque[i],
+                self.radius[i],
+                self.mass[i],
+            );
+        }
+        self.force_time_velocities = Some((v, w));
+    }
+
     /// Keep the velocities of every force computation (for [`ShearSim::observe_contacts`]).
     pub fn keep_force_time_velocities(&mut self) {
         self.force_time_velocities = Some((self.v.clone(), self.omega.clone()));
