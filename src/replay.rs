@@ -557,14 +557,31 @@ fn compare(a: &Side, b: &Side) -> Vec<ChannelError> {
         out.push(acc.finish(name));
     }
     let mut missing = (0usize, String::new());
-    contact_channels(
-        &a.pairs,
-        &b.pairs,
-        "pair",
-        |k, kind| format!("pair {}-{} ({kind})", k.0 + 1, k.1 + 1),
-        &mut missing,
-        &mut out,
-    );
+    // pairs across a periodic seam in channels of their own (see PERIODIC_RTOL)
+    let periodic = |k: &(u32, u32)| {
+        a.pairs
+            .get(k)
+            .or_else(|| b.pairs.get(k))
+            .is_some_and(|e| e.3.contains("periodic"))
+    };
+    let split = |m: &HashMap<(u32, u32), ContactValues>,
+                 want: bool|
+     -> HashMap<(u32, u32), ContactValues> {
+        m.iter()
+            .filter(|(k, _)| periodic(k) == want)
+            .map(|(k, v)| (*k, v.clone()))
+            .collect()
+    };
+    for (want, what) in [(false, "pair"), (true, "periodic_pair")] {
+        contact_channels(
+            &split(&a.pairs, want),
+            &split(&b.pairs, want),
+            what,
+            |k, kind| format!("pair {}-{} ({kind})", k.0 + 1, k.1 + 1),
+            &mut missing,
+            &mut out,
+        );
+    }
     contact_channels(
         &a.walls,
         &b.walls,
@@ -632,11 +649,15 @@ fn contact_channels<K: std::hash::Hash + Eq>(
 /// velocity round-off, which cdt's torque direction `wr / |wr|` amplifies without bound near
 /// rolling reversal; so they are reported, and judged as `kernel_*`: the native kernels
 /// evaluated on LIGGGHTS' own recorded state of the same step (same inputs).
-pub const JUDGED: [&str; 13] = [
+pub const JUDGED: [&str; 17] = [
     "f",
     "torque",
     "pair_shear_hist",
     "pair_roll_hist",
+    "periodic_pair_shear_hist",
+    "periodic_pair_roll_hist",
+    "kernel_periodic_pair_force",
+    "kernel_periodic_pair_torque",
     "wall_shear_hist",
     "wall_roll_hist",
     "plate_force",
@@ -649,20 +670,52 @@ pub const JUDGED: [&str; 13] = [
 ];
 
 /// Channels of the kernel check (see [`JUDGED`]).
-const KERNEL: [&str; 5] = [
+const KERNEL: [&str; 7] = [
     "pair_force",
     "pair_torque",
+    "periodic_pair_force",
+    "periodic_pair_torque",
     "wall_force",
     "wall_torque",
     "contact_set",
 ];
 
-fn worst(ch: &[ChannelError]) -> ChannelError {
+/// Step-1 tolerance of pairs across a periodic seam. LIGGGHTS (newton off) holds two copies of
+/// such a contact, one per owner, each computed from its own rounded ghost coordinate
+/// (`x + box length`) with its own history; `compute pair/gran/local` reports only the copy
+/// of the higher id. The native pair starts from that copy and sees the partner through the
+/// other rounding, so a contact just touching differs at `ulp(x) / overlap`: relative to the
+/// channel's peak about `ulp(x) / largest overlap`, 1e-12 here (2.7e-12 measured once in 84
+/// ci windows, for a sliding pair).
+pub const PERIODIC_RTOL: f64 = 1e-11;
+
+/// The tolerance of a channel at step 1.
+pub fn tolerance(channel: &str, rtol: f64) -> f64 {
+    if channel.contains("periodic") {
+        rtol.max(PERIODIC_RTOL)
+    } else {
+        rtol
+    }
+}
+
+/// The judged channel furthest from its tolerance `tolerance(channel) max floor`.
+fn worst(ch: &[ChannelError], rtol: f64, floor: f64) -> ChannelError {
     ch.iter()
         .filter(|c| JUDGED.contains(&c.channel.as_str()))
-        .max_by(|a, b| a.max_rel_err.total_cmp(&b.max_rel_err))
+        .max_by(|a, b| {
+            let r = |c: &ChannelError| c.max_rel_err / tolerance(&c.channel, rtol).max(floor);
+            r(a).total_cmp(&r(b))
+        })
         .cloned()
         .unwrap_or_default()
+}
+
+/// Largest error over the judged channels (the chaos envelope).
+fn max_judged(ch: &[ChannelError]) -> f64 {
+    ch.iter()
+        .filter(|c| JUDGED.contains(&c.channel.as_str()))
+        .map(|c| c.max_rel_err)
+        .fold(0.0, f64::max)
 }
 
 /// Runs LIGGGHTS (kept under `out/liggghts/`) and replays every window natively.
@@ -843,14 +896,14 @@ fn replay_window<'a>(
             }
         }
         prev_state = d.state;
-        let chaos = worst(&compare(&tw, &nat)).max_rel_err;
-        let w = worst(&ch);
-        let limit = if steps.is_empty() {
-            rtol
+        let chaos = max_judged(&compare(&tw, &nat));
+        let floor = if steps.is_empty() {
+            0.0
         } else {
-            rtol.max(CHAOS_FACTOR * chaos)
+            CHAOS_FACTOR * chaos
         };
-        let pass = w.max_rel_err <= limit;
+        let w = worst(&ch, rtol, floor);
+        let pass = w.max_rel_err <= tolerance(&w.channel, rtol).max(floor);
         if alive && pass {
             horizon += 1;
         } else {
@@ -976,8 +1029,8 @@ fn plot(out: &Path, o: &ReplayOutcome) -> Result<()> {
 /// The terminal table.
 pub fn table(o: &ReplayOutcome) -> String {
     let mut s = format!(
-        "replay {} ({}, mu_r {}, eta_r {}, e {}): step 1 within {:e}, later steps within {}x the 1-ulp chaos envelope\n",
-        o.case, o.rolling, o.mu_r, o.eta_r, o.restitution, o.rtol, o.chaos_factor
+        "replay {} ({}, mu_r {}, eta_r {}, e {}): step 1 within {:e} (pairs across the periodic seam {:e}), later steps within {}x the 1-ulp chaos envelope\n",
+        o.case, o.rolling, o.mu_r, o.eta_r, o.restitution, o.rtol, tolerance("periodic", o.rtol), o.chaos_factor
     );
     s.push_str("  start  phase       pairs per sl rl  wall f/e  rb seam tri  step-1 err  worst step-1 channel (item)                      horizon\n");
     for w in &o.windows {
