@@ -95,8 +95,7 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
         let rp = &r["replay"];
         assert_eq!(rp["pass"], true, "{r}");
         assert_eq!(rp["windows"].as_u64(), Some(4), "{r}");
-        // 1e-12, and 1e-11 for pairs across the periodic seam (replay::PERIODIC_RTOL)
-        assert!(rp["worst_step1"].as_f64().unwrap() <= 1e-11, "{r}");
+        assert!(rp["worst_step1"].as_f64().unwrap() <= 1e-12, "{r}");
         assert_eq!(rp["min_horizon"].as_u64(), Some(12), "{r}");
     }
     // the paper's point with the unstable explicit dashpot is flagged

@@ -13,7 +13,11 @@
 
 use crate::solver::contact::ContactHistory;
 
-/// One listed pair, `i < j`.
+/// One listed pair: `i < j`, except across a periodic seam, where `i` is the higher index and
+/// `j` the lower one seen at its image. LIGGGHTS (newton off) keeps two copies of such a
+/// contact, one per owner, each computed from its own rounded ghost coordinate, and reports the
+/// higher id's copy (`compute pair/gran/local` drops the other); this orientation makes the
+/// native pair that copy, operation for operation, so its history is the one LIGGGHTS dumps.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pair {
     pub i: u32,
@@ -145,25 +149,41 @@ impl NeighborList {
             cand.dedup_by_key(|c| c.0);
             for &(j, shift, touch) in &cand {
                 touching.push(touch);
+                let (a, b, s) = if shift == [0.0; 3] {
+                    (i as u32, j, shift)
+                } else {
+                    (j, i as u32, [-shift[0], -shift[1], -shift[2]])
+                };
                 new_pairs.push(Pair {
-                    i: i as u32,
-                    j,
-                    shift,
+                    i: a,
+                    j: b,
+                    shift: s,
                     hist: ContactHistory::default(),
                 });
             }
         }
-        // carry histories of touching pairs over: both lists are sorted by (i, j)
+        // carry histories of touching pairs over: both lists are sorted by (lower, higher)
+        let key = |p: &Pair| (p.i.min(p.j), p.i.max(p.j));
         let mut k = 0;
         for (p, &touch) in new_pairs.iter_mut().zip(&touching) {
             if !touch {
                 continue;
             }
-            while k < self.pairs.len() && (self.pairs[k].i, self.pairs[k].j) < (p.i, p.j) {
+            while k < self.pairs.len() && key(&self.pairs[k]) < key(p) {
                 k += 1;
             }
-            if k < self.pairs.len() && (self.pairs[k].i, self.pairs[k].j) == (p.i, p.j) {
-                p.hist = self.pairs[k].hist;
+            if k < self.pairs.len() && key(&self.pairs[k]) == key(p) {
+                let h = self.pairs[k].hist;
+                // a pair that started or stopped crossing the seam turned round: its history
+                // is relative (i against j), so it changes sign
+                p.hist = if self.pairs[k].i == p.i {
+                    h
+                } else {
+                    ContactHistory {
+                        shear: h.shear.map(|c| -c),
+                        r_torque: h.r_torque.map(|c| -c),
+                    }
+                };
             }
         }
         self.pairs = new_pairs;
@@ -206,9 +226,22 @@ mod tests {
         let b = Periodic { lx: 1.0, lz: 1.0 };
         nl.build(&x, &r, 0.01, b);
         assert_eq!(nl.pairs.len(), 1, "{:?}", nl.pairs);
-        assert_eq!((nl.pairs[0].i, nl.pairs[0].j), (0, 1));
-        assert_eq!(nl.pairs[0].shift, [-1.0, 0.0, 0.0]);
+        // across the seam the pair is oriented from the higher index (LIGGGHTS' reported copy)
+        assert_eq!((nl.pairs[0].i, nl.pairs[0].j), (1, 0));
+        assert_eq!(nl.pairs[0].shift, [1.0, 0.0, 0.0]);
         nl.pairs[0].hist.shear = [1.0, 2.0, 3.0];
+        nl.build(&x, &r, 0.01, b);
+        assert_eq!(nl.pairs[0].hist.shear, [1.0, 2.0, 3.0]);
+        // particle 0 wrapped to the other side of the seam: the pair no longer crosses it,
+        // turns round to (0, 1), and its relative history changes sign
+        let mut wrapped = x.clone();
+        wrapped[0][0] = 1.05 - 1e-3;
+        nl.build(&wrapped, &r, 0.01, b);
+        assert_eq!(
+            (nl.pairs[0].i, nl.pairs[0].j, nl.pairs[0].shift),
+            (0, 1, [0.0; 3])
+        );
+        assert_eq!(nl.pairs[0].hist.shear, [-1.0, -2.0, -3.0]);
         nl.build(&x, &r, 0.01, b);
         assert_eq!(nl.pairs[0].hist.shear, [1.0, 2.0, 3.0]);
         // listed but not touching at the rebuild: history starts again from zero

@@ -254,8 +254,8 @@ impl ShearSim {
         probe.compute_forces(false)?;
         // LIGGGHTS reports a pair across a periodic seam from the copy owned by the higher
         // atom id, whose partner is a ghost atom: ghosts got their velocities at the last
-        // forward communication, before final_integrate. So the lower id (`p.i` here)
-        // enters with its force-time velocities.
+        // forward communication, before final_integrate. So the lower id (`p.j` of such a
+        // pair, see `neighbor::Pair`) enters with its force-time velocities.
         if let Some((fv, fw)) = &self.force_time_velocities {
             let (x, r, m) = (&probe.x, &probe.radius, &probe.mass);
             for (p, out) in probe.nl.pairs.iter().zip(probe.pair_force.iter_mut()) {
@@ -268,8 +268,8 @@ impl ShearSim {
                     (x[i], x[j]),
                     (r[i], r[j]),
                     (m[i], m[j]),
-                    (fv[i], probe.v[j]),
-                    (fw[i], probe.omega[j]),
+                    (probe.v[i], fv[j]),
+                    (probe.omega[i], fw[j]),
                 ) {
                     let mut h = p.hist;
                     let (fi, fj, _) = crate::solver::contact::surfaces_intersect(
