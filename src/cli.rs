@@ -34,6 +34,7 @@ pub enum Outcome {
         verify contact --list\n  \
         verify decks                                   # regenerate liggghts_inputs/\n  \
         verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n  \
+        verify replay --mu-r 0.5 --preset ci             # the gouge contact by contact from LIGGGHTS' states\n  \
         verify nightly --out runs/nightly/today          # everything, report.html\n\n\
         Exit status: 0 agree, 1 disagree, 2 error."
 )]
