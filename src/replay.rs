@@ -836,13 +836,13 @@ fn replay_window<'a>(
 ) -> Result<WindowResult> {
     let atoms = case.particles;
     let d0 = read_dumped(dir, s, atoms, n_hist, ntri)?;
-    let mut sim = plates.clone_for_observation();
+    let mut sim = plates.clone();
     sim.load_recorded(&d0.state)?;
     sim.keep_force_time_velocities();
     // the plates as LIGGGHTS moved them, for the kernel check on LIGGGHTS' own states
-    let mut lig_plates = plates.clone_for_observation();
+    let mut lig_plates = plates.clone();
     let mut prev_state = d0.state.clone();
-    let mut twin = sim.clone_for_observation();
+    let mut twin = sim.clone();
     twin.x[0][0] = next_up(twin.x[0][0]);
     let mut cov = Coverage::default();
     let builds0 = sim.neighbor_builds();
@@ -863,7 +863,7 @@ fn replay_window<'a>(
         // kernel check: the native contact kernels on LIGGGHTS' own state of this step give
         // LIGGGHTS' contact forces and torques (same inputs, same operations)
         lig_plates.step_plates_only(v3(row(step)?, 0))?;
-        let mut probe = lig_plates.clone_for_observation();
+        let mut probe = lig_plates.clone();
         probe.load_recorded(&d.state)?;
         probe.set_force_time_velocities_from(&prev_state);
         let kernel = native_side(&probe, &d.pairs)?;
@@ -977,18 +977,14 @@ fn plot(out: &Path, o: &ReplayOutcome) -> Result<()> {
         .windows
         .iter()
         .map(|w| {
-            let a = w
-                .steps
-                .iter()
-                .enumerate()
-                .map(|(i, s)| ((i + 1) as f64, s.max_rel_err.max(floor).log10()))
-                .collect();
-            let b = w
-                .steps
-                .iter()
-                .enumerate()
-                .map(|(i, s)| ((i + 1) as f64, s.chaos_rel_err.max(floor).log10()))
-                .collect();
+            let curve = |e: fn(&StepResult) -> f64| -> Points {
+                w.steps
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| ((i + 1) as f64, e(s).max(floor).log10()))
+                    .collect()
+            };
+            let (a, b) = (curve(|s| s.max_rel_err), curve(|s| s.chaos_rel_err));
             (a, b, format!("from step {}", w.start))
         })
         .collect();

@@ -19,7 +19,6 @@
 //! last rebuild (pair/gran/local lists touching pairs only). Such a pair starts from zero
 //! history here; it matters only if it touches again before the next rebuild.
 
-use super::neighbor::Pair;
 use super::{ShearSim, WallSlots, MAX_WALL_CONTACTS};
 use crate::error::{Error, Result};
 use crate::solver::contact::ContactHistory;
@@ -250,7 +249,7 @@ impl ShearSim {
     /// `wall/gran/local` report at a dump (PairGran::compute_pgl, FixWallGran::
     /// post_force_pgl: `shearupdate = 0`, end-of-step velocities and plate velocities).
     pub fn observe_contacts(&self) -> Result<(Vec<PairObservation>, Vec<WallObservation>)> {
-        let mut probe = self.clone_for_observation();
+        let mut probe = self.clone();
         probe.compute_forces(false)?;
         // LIGGGHTS reports a pair across a periodic seam from the copy owned by the higher
         // atom id, whose partner is a ghost atom: ghosts got their velocities at the last
@@ -332,15 +331,5 @@ impl ShearSim {
     /// Torque on every particle at the last step [N m].
     pub fn torques(&self) -> &[V3] {
         &self.torque
-    }
-
-    /// The listed pairs with their histories (for a perturbed copy in the chaos envelope).
-    pub fn listed_pairs(&self) -> &[Pair] {
-        &self.nl.pairs
-    }
-
-    /// A copy of the whole state (the replay's chaos twin and contact probe).
-    pub fn clone_for_observation(&self) -> ShearSim {
-        self.clone()
     }
 }
