@@ -20,7 +20,7 @@ fn contact(c: &mut Criterion) {
         RollingModel::Epsd3,
     ] {
         let case = ShearCase::preset(
-            "fast",
+            dem_verify::spec::shear::Preset::Fast,
             model,
             0.5,
             if model.has_damping() { 0.5 } else { 0.0 },
@@ -56,7 +56,14 @@ fn contact(c: &mut Criterion) {
 }
 
 fn neighbor(c: &mut Criterion) {
-    let case = ShearCase::preset("fast", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+    let case = ShearCase::preset(
+        dem_verify::spec::shear::Preset::Fast,
+        RollingModel::Epsd,
+        0.5,
+        0.5,
+        1,
+    )
+    .unwrap();
     let pk = loose_packing(&case);
     let mut nl = NeighborList::default();
     let b = Periodic {
@@ -69,7 +76,14 @@ fn neighbor(c: &mut Criterion) {
 }
 
 fn trimesh(c: &mut Criterion) {
-    let case = ShearCase::preset("fast", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+    let case = ShearCase::preset(
+        dem_verify::spec::shear::Preset::Fast,
+        RollingModel::Epsd,
+        0.5,
+        0.5,
+        1,
+    )
+    .unwrap();
     let plate = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
     let mesh = TriMesh::new(
         &plate_triangles(&plate, case.box_z),

@@ -5,7 +5,14 @@ use dem_verify::solver::shear::ShearSim;
 use dem_verify::spec::{shear::ShearCase, RollingModel};
 
 fn main() {
-    let c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+    let c = ShearCase::preset(
+        dem_verify::spec::shear::Preset::Ci,
+        RollingModel::Epsd,
+        0.5,
+        0.5,
+        1,
+    )
+    .unwrap();
     let p = loose_packing(&c);
     let mut s = ShearSim::new(&c, &p);
     s.setup(0.0).unwrap();

@@ -12,7 +12,14 @@ fn main() {
         .num_threads(1)
         .build_global()
         .unwrap();
-    let c = ShearCase::preset("fast", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+    let c = ShearCase::preset(
+        dem_verify::spec::shear::Preset::Fast,
+        RollingModel::Epsd,
+        0.5,
+        0.5,
+        1,
+    )
+    .unwrap();
     let p = loose_packing(&c);
     let mut s = ShearSim::new(&c, &p);
     s.setup(0.0).unwrap();

@@ -7,6 +7,7 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let preset = args.get(1).map(String::as_str).unwrap_or("ci");
     let out = std::path::PathBuf::from(args.get(2).map(String::as_str).unwrap_or("shear_deck"));
+    let preset = dem_verify::spec::shear::Preset::parse(preset).unwrap();
     let c = ShearCase::preset(preset, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
     c.validate(false).unwrap();
     let d = shear_deck(&c, &loose_packing(&c));

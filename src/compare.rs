@@ -2,26 +2,30 @@
 
 use crate::error::{Error, Result};
 use crate::series::Series;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Default relative tolerance of contact-level comparisons (max error / channel peak).
 pub const CONTACT_RTOL: f64 = 1e-9;
 
 /// Agreement of one channel of one case run.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ChannelResult {
     pub case: String,
     pub model: String,
     pub channel: String,
     pub unit: String,
     /// Largest |a - b| over steps and components.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub max_abs_err: f64,
     /// `max_abs_err / peak`; 0 when both series are identically zero.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub max_rel_err: f64,
     /// Largest magnitude of the channel (vector norm) over both series.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub peak: f64,
     /// Step at which `max_abs_err` occurs.
     pub worst_step: u64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub rtol: f64,
     pub pass: bool,
 }
@@ -36,7 +40,7 @@ pub fn compare(
     rtol: f64,
 ) -> Result<Vec<ChannelResult>> {
     if a.columns != b.columns {
-        return Err(Error::Reference(format!(
+        return Err(Error::Mismatch(format!(
             "{case}/{model}: the two series have different columns ({} vs {})",
             a.columns.len(),
             b.columns.len()
@@ -44,7 +48,7 @@ pub fn compare(
     }
     if a.steps != b.steps {
         let first = a.steps.iter().zip(&b.steps).find(|(x, y)| x != y);
-        return Err(Error::Reference(format!(
+        return Err(Error::Mismatch(format!(
             "{case}/{model}: output steps differ ({} vs {} rows{})",
             a.steps.len(),
             b.steps.len(),
@@ -146,7 +150,7 @@ pub const MU_ATOL: f64 = 0.02;
 pub const STRESS_RTOL: f64 = 0.01;
 
 /// How long two runs from the same initial state agree.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Horizon {
     /// Last output step at which every compared channel agrees within `rtol` of its peak.
     pub last_agree_step: u64,
@@ -245,18 +249,21 @@ pub fn lockstep(a: &Series, b: &Series, channels: &[&str], rtol: f64) -> Horizon
     }
 }
 
-/// Two-sided 95 % Student t quantile for `dof` degrees of freedom.
+/// Two-sided 95 % Student t quantile for `dof` degrees of freedom (statrs' inverse CDF at
+/// 0.975; infinite for 0 degrees of freedom).
 pub fn t95(dof: usize) -> f64 {
-    const T: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
-        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
-        2.052, 2.048, 2.045, 2.042,
-    ];
-    match dof {
-        0 => f64::INFINITY,
-        d if d <= 30 => T[d - 1],
-        _ => 1.96,
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    match StudentsT::new(0.0, 1.0, dof as f64) {
+        Ok(t) if dof > 0 => t.inverse_cdf(0.975),
+        _ => f64::INFINITY,
     }
+}
+
+/// The crate's agreement rule for two estimates with 95 % confidence half-widths: they agree
+/// when they differ by no more than the sum of the half-widths (the intervals overlap). Used
+/// for steady mu between codes, between time steps and between sweep points.
+pub fn within_cis(a: f64, a_ci95: f64, b: f64, b_ci95: f64) -> bool {
+    (a - b).abs() <= a_ci95 + b_ci95
 }
 
 /// Mean and 95 % confidence half-width of samples (t distribution).
@@ -276,13 +283,16 @@ pub fn mean_ci95(x: &[f64]) -> (f64, f64) {
 /// Paired difference of two codes over the same seeds (`b - a` per seed): the seeds share
 /// their initial packings, so the seed-to-seed spread cancels and a code difference far below
 /// it becomes visible.
-#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Paired {
     pub n: usize,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mean: f64,
     /// 95 % CI half-width of the mean difference (t distribution, n - 1 dof).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub ci95: f64,
     /// mean / standard error (NaN below 2 seeds).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub t: f64,
     /// Seeds where b > a.
     pub b_higher: usize,
@@ -325,16 +335,44 @@ pub fn block_ci95(v: &[f64]) -> f64 {
 }
 
 /// Steady-state figures of one code over its seeds.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Steady {
     /// Mean mu over the steady window, per seed.
     pub per_seed_mu: Vec<f64>,
     /// Mean over seeds and its 95 % CI half-width (over seeds; with one seed, from 10 block
     /// means of the window).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mu: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mu_ci95: f64,
     /// Mean normal stress on the top plate in the window [Pa], per seed.
     pub per_seed_stress: Vec<f64>,
+}
+
+/// Means of one seed's series over a window: the figures every study reports per code.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WindowFigures {
+    /// mu = Fx / Fy on the top plate.
+    pub mu: f64,
+    /// Normal stress on the top plate [Pa].
+    pub normal_stress: f64,
+    /// Rotational and translational kinetic energy [J].
+    pub erot: f64,
+    pub ke: f64,
+    /// Fraction of touching pairs at full rolling mobilisation (native; NaN for LIGGGHTS).
+    pub mobilised: f64,
+}
+
+/// The window means of a series (steps in `(w.0, w.1]`, [`Series::window_mean`]); `area`
+/// converts the top plate's force to stress.
+pub fn window_figures(s: &Series, w: (u64, u64), area: f64) -> WindowFigures {
+    WindowFigures {
+        mu: s.window_mean("mu[-]", w),
+        normal_stress: s.window_mean("top_f_y[N]", w) / area,
+        erot: s.window_mean("erot[J]", w),
+        ke: s.window_mean("ke[J]", w),
+        mobilised: s.window_mean("mobilised[-]", w),
+    }
 }
 
 /// Steady window rule: the second half (by steps) of the last shear stage.
@@ -463,7 +501,18 @@ mod shear_tests {
     fn steady_mean_and_ci() {
         let (m, ci) = mean_ci95(&[1.0, 2.0, 3.0]);
         assert_eq!(m, 2.0);
-        assert!((ci - 4.303 * (1.0f64 / 3.0).sqrt()).abs() < 1e-12);
+        assert!((ci - 4.302_652_729_911 * (1.0f64 / 3.0).sqrt()).abs() < 1e-9);
+        // published two-sided 95 % t quantiles
+        for (dof, t) in [
+            (1, 12.706_204_736),
+            (2, 4.302_652_730),
+            (10, 2.228_138_852),
+            (30, 2.042_272_456),
+            (1000, 1.962_339_081),
+        ] {
+            assert!((t95(dof) - t).abs() < 1e-6, "dof {dof}: {}", t95(dof));
+        }
+        assert_eq!(t95(0), f64::INFINITY);
         let st = steady(
             &[s(&[1.0, 2.0, 3.0, 4.0]), s(&[2.0, 2.0, 2.0, 2.0])],
             steady_window(0, 30),

@@ -21,8 +21,11 @@ pub enum Error {
         valid: String,
     },
     /// A case file that is not valid TOML or has unknown/missing fields.
-    #[error("cannot read case file {path}: {msg}")]
-    CaseFile { path: PathBuf, msg: String },
+    #[error("cannot read case file {path}: {source}")]
+    CaseFile {
+        path: PathBuf,
+        source: toml::de::Error,
+    },
     /// The LIGGGHTS binary could not be found.
     #[error(
         "LIGGGHTS binary `{binary}` not found. Install it with\n  \
@@ -44,16 +47,32 @@ pub enum Error {
     /// The native solver reached a non-finite or unsupported state.
     #[error("native solver stopped at step {step}: {msg}")]
     Solver { step: u64, msg: String },
-    /// Stored reference data missing or inconsistent.
-    #[error("reference data: {0}")]
-    Reference(String),
+    /// Stored LIGGGHTS reference data missing or inconsistent.
+    #[error("reference data at {path}: {msg}")]
+    Reference { path: PathBuf, msg: String },
+    /// Two series that cannot be compared (other columns, other output steps).
+    #[error("series cannot be compared: {0}")]
+    Mismatch(String),
+    /// Results a study wrote and then needs are not there (or not complete).
+    #[error("{what} missing in {dir}")]
+    Missing { what: String, dir: PathBuf },
     #[error("I/O error on {path}: {source}")]
     Io {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("CSV error on {path}: {msg}")]
-    Csv { path: PathBuf, msg: String },
+    #[error("CSV error on {path}: {source}")]
+    Csv { path: PathBuf, source: csv::Error },
+    /// A CSV that reads but is not what it should be (header, numbers).
+    #[error("CSV file {path}: {msg}")]
+    CsvFormat { path: PathBuf, msg: String },
+    /// A JSON file of ours (summary, manifest, history) that does not parse.
+    #[error("cannot parse {path}{}: {source}", line.map(|l| format!(" line {l}")).unwrap_or_default())]
+    JsonFile {
+        path: PathBuf,
+        line: Option<usize>,
+        source: serde_json::Error,
+    },
     /// A run of several cases in which some could not be run (each named in the message).
     #[error("{0}")]
     Cases(String),

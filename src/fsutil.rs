@@ -39,6 +39,14 @@ pub fn tail(text: &str, n: usize) -> String {
     lines[lines.len().saturating_sub(n)..].join("\n")
 }
 
+/// Deserializes an f64 that may be `null`: serde_json writes NaN and infinities as `null`, so
+/// reading a stored summary back maps `null` to NaN (use with `#[serde(deserialize_with)]` on
+/// fields that can be NaN: one-seed CIs, quantities a code does not report).
+pub fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    use serde::Deserialize;
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

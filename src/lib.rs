@@ -7,25 +7,18 @@
 // Kernels index x/y/z components explicitly, as the LIGGGHTS code they mirror does.
 #![allow(clippy::needless_range_loop)]
 
-pub mod bench;
 pub mod cli;
-pub mod cli_convergence;
-pub mod cli_nightly;
-pub mod cli_replay;
-pub mod cli_shear;
-pub mod cli_sweep;
 pub mod compare;
 pub mod deck;
 pub mod error;
 pub mod fsutil;
 pub mod liggghts;
 pub mod packing;
-pub mod replay;
 pub mod report;
+pub mod run;
 pub mod series;
 pub mod shear;
 pub mod solver;
 pub mod spec;
-pub mod sweep;
 
 pub use error::{Error, Result};

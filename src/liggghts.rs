@@ -24,16 +24,13 @@ pub struct Liggghts {
     pub mpi_procs: Option<usize>,
 }
 
-/// Finds `name` on PATH (or accepts an explicit path that exists).
+/// Finds `name` on PATH (`which`), or accepts an explicit path (a name with a directory part)
+/// that is a file.
 fn which(name: &Path) -> Option<PathBuf> {
     if name.components().count() > 1 {
         return name.is_file().then(|| name.to_path_buf());
     }
-    std::env::var_os("PATH").and_then(|paths| {
-        std::env::split_paths(&paths)
-            .map(|d| d.join(name))
-            .find(|p| p.is_file())
-    })
+    which::which(name).ok()
 }
 
 impl Liggghts {

@@ -2,13 +2,16 @@
 //! (0 agree, 1 disagree, 2 error).
 
 use clap::Parser;
-use dem_verify::cli::{run, Cli, Outcome};
+use dem_verify::cli::{run, Cli};
+use dem_verify::run::Verdict;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
     match run(Cli::parse()) {
-        Ok(Outcome::Agree) => ExitCode::SUCCESS,
-        Ok(Outcome::Disagree) => ExitCode::from(1),
+        Ok(Verdict::Agree) => ExitCode::SUCCESS,
+        Ok(Verdict::Disagree) => ExitCode::from(1),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)

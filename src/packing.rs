@@ -148,7 +148,14 @@ mod tests {
 
     #[test]
     fn packing_is_seeded_and_overlap_free() {
-        let c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 7).unwrap();
+        let c = ShearCase::preset(
+            crate::spec::shear::Preset::Ci,
+            RollingModel::Epsd,
+            0.5,
+            0.0,
+            7,
+        )
+        .unwrap();
         let a = loose_packing(&c);
         let b = loose_packing(&c);
         assert_eq!(a, b);
@@ -165,7 +172,14 @@ mod tests {
             assert!(a.position[i][1] - a.radius[i] > c.plates.tooth_height());
             assert!(a.position[i][1] + a.radius[i] < a.top_y - c.plates.tooth_height());
         }
-        let c2 = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 8).unwrap();
+        let c2 = ShearCase::preset(
+            crate::spec::shear::Preset::Ci,
+            RollingModel::Epsd,
+            0.5,
+            0.0,
+            8,
+        )
+        .unwrap();
         assert_ne!(loose_packing(&c2).position, a.position);
     }
 }

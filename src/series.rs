@@ -115,7 +115,7 @@ impl Series {
                 k += 1;
             }
             if self.steps.get(k) != Some(&st) {
-                return Err(Error::Reference(format!(
+                return Err(Error::Mismatch(format!(
                     "step {st} is missing from the series"
                 )));
             }
@@ -141,9 +141,9 @@ impl Series {
     /// Writes the CSV (`step,<columns>`), atomically, values with 17 significant digits.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
         let mut w = csv::Writer::from_writer(Vec::new());
-        let csv_err = |e: csv::Error| Error::Csv {
+        let csv_err = |source: csv::Error| Error::Csv {
             path: path.to_path_buf(),
-            msg: e.to_string(),
+            source,
         };
         let mut header = vec!["step".to_string()];
         header.extend(self.columns.iter().cloned());
@@ -155,27 +155,31 @@ impl Series {
         }
         let bytes = w.into_inner().map_err(|e| Error::Csv {
             path: path.to_path_buf(),
-            msg: e.to_string(),
+            source: e.into_error().into(),
         })?;
         write_atomic(path, &bytes)
     }
 
     /// Reads a CSV written by [`Series::write_csv`].
     pub fn read_csv(path: &Path) -> Result<Self> {
-        let csv_err = |msg: String| Error::Csv {
+        let csv_err = |source: csv::Error| Error::Csv {
+            path: path.to_path_buf(),
+            source,
+        };
+        let format_err = |msg: String| Error::CsvFormat {
             path: path.to_path_buf(),
             msg,
         };
-        let mut r = csv::Reader::from_path(path).map_err(|e| csv_err(e.to_string()))?;
-        let headers = r.headers().map_err(|e| csv_err(e.to_string()))?.clone();
+        let mut r = csv::Reader::from_path(path).map_err(csv_err)?;
+        let headers = r.headers().map_err(csv_err)?.clone();
         if headers.get(0) != Some("step") {
-            return Err(csv_err("first column must be `step`".into()));
+            return Err(format_err("first column must be `step`".into()));
         }
         let mut s = Series::new();
         s.columns = headers.iter().skip(1).map(String::from).collect();
         for (ln, rec) in r.records().enumerate() {
-            let rec = rec.map_err(|e| csv_err(e.to_string()))?;
-            let bad = |f: &str| csv_err(format!("row {}: bad number {f:?}", ln + 2));
+            let rec = rec.map_err(csv_err)?;
+            let bad = |f: &str| format_err(format!("row {}: bad number {f:?}", ln + 2));
             let step = rec[0].parse().map_err(|_| bad(&rec[0]))?;
             let row: Result<Vec<f64>> = rec
                 .iter()

@@ -14,9 +14,52 @@ use crate::spec::shear::ShearCase;
 use std::path::Path;
 use std::time::Instant;
 
-/// One output row of either code: step, top force (3), bottom force (3), top plate y,
-/// translational and rotational kinetic energy.
-pub type Row = (u64, [f64; 10]);
+/// One output row of either code (SI units; forces are the particles' on the plates).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    pub step: u64,
+    pub top_force: [f64; 3],
+    pub bottom_force: [f64; 3],
+    /// y of the top plate's base [m].
+    pub top_y: f64,
+    /// Translational and rotational kinetic energy [J].
+    pub ke: f64,
+    pub erot: f64,
+    /// Fraction of touching pairs at full rolling mobilisation (native only; NaN for LIGGGHTS).
+    pub mobilised: f64,
+}
+
+impl Row {
+    /// The values in [`ROW_COLUMNS`] order.
+    pub fn values(&self) -> [f64; 10] {
+        let (t, b) = (self.top_force, self.bottom_force);
+        [
+            t[0],
+            t[1],
+            t[2],
+            b[0],
+            b[1],
+            b[2],
+            self.top_y,
+            self.ke,
+            self.erot,
+            self.mobilised,
+        ]
+    }
+
+    /// The row of values in [`ROW_COLUMNS`] order.
+    pub fn from_values(step: u64, v: [f64; 10]) -> Self {
+        Row {
+            step,
+            top_force: [v[0], v[1], v[2]],
+            bottom_force: [v[3], v[4], v[5]],
+            top_y: v[6],
+            ke: v[7],
+            erot: v[8],
+            mobilised: v[9],
+        }
+    }
+}
 
 /// Series columns holding a [`Row`]'s values, in the row's order.
 pub const ROW_COLUMNS: [&str; 10] = [
@@ -104,21 +147,15 @@ pub fn run_native(
     let mut compacted = None;
     let rec = |sim: &ShearSim| {
         let r = sim.record();
-        (
-            r.step,
-            [
-                r.top_force[0],
-                r.top_force[1],
-                r.top_force[2],
-                r.bottom_force[0],
-                r.bottom_force[1],
-                r.bottom_force[2],
-                r.top_y,
-                r.ke,
-                r.erot,
-                r.mobilised,
-            ],
-        )
+        Row {
+            step: r.step,
+            top_force: r.top_force,
+            bottom_force: r.bottom_force,
+            top_y: r.top_y,
+            ke: r.ke,
+            erot: r.erot,
+            mobilised: r.mobilised,
+        }
     };
     let result = (|| -> Result<()> {
         sim.setup(0.0)?;
@@ -205,13 +242,13 @@ pub fn run_liggghts(
         // the mobilised fraction is not in LIGGGHTS' thermo output
         let mut row = [f64::NAN; 10];
         row[..9].copy_from_slice(&v[..9]);
-        rows.push((step, row));
+        rows.push(Row::from_values(step, row));
     }
-    if rows.last().map(|r| r.0) != Some(case.total_steps()) {
+    if rows.last().map(|r| r.step) != Some(case.total_steps()) {
         return Err(Error::LiggghtsFailed {
             reason: format!(
                 "the log ends at step {:?}, expected {}",
-                rows.last().map(|r| r.0),
+                rows.last().map(|r| r.step),
                 case.total_steps()
             ),
             log: dir.join(LOG_NAME),
@@ -248,25 +285,26 @@ pub fn shear_series(case: &ShearCase, rows: &[Row]) -> Series {
         steps: Vec::with_capacity(rows.len()),
         rows: Vec::with_capacity(rows.len()),
     };
-    for (step, v) in rows {
-        let h = v[6] - t;
-        let mu = if v[1] != 0.0 { v[0] / v[1] } else { 0.0 };
-        s.steps.push(*step);
+    for r in rows {
+        let (top, bottom) = (r.top_force, r.bottom_force);
+        let h = r.top_y - t;
+        let mu = if top[1] != 0.0 { top[0] / top[1] } else { 0.0 };
+        s.steps.push(r.step);
         s.rows.push(vec![
-            *step as f64 * case.dt,
-            displacement(case, *step) / h,
-            v[0],
-            v[1],
-            v[2],
-            v[3],
-            v[4],
-            v[5],
-            v[6],
+            r.step as f64 * case.dt,
+            displacement(case, r.step) / h,
+            top[0],
+            top[1],
+            top[2],
+            bottom[0],
+            bottom[1],
+            bottom[2],
+            r.top_y,
             h,
             mu,
-            v[7],
-            v[8],
-            v[9],
+            r.ke,
+            r.erot,
+            r.mobilised,
         ]);
     }
     s
@@ -301,7 +339,14 @@ mod tests {
 
     #[test]
     fn displacement_follows_the_stage_schedule() {
-        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        let mut c = ShearCase::preset(
+            crate::spec::shear::Preset::Ci,
+            RollingModel::Epsd,
+            0.5,
+            0.0,
+            1,
+        )
+        .unwrap();
         c.stages = vec![
             crate::spec::shear::Stage {
                 speed: 0.01,

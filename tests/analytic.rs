@@ -9,8 +9,8 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use dem_verify::cli::contact_runs;
 use dem_verify::deck::run_name;
+use dem_verify::run::contact::{contact_runs, RollingChoice};
 use dem_verify::series::{contact_series, Series};
 use dem_verify::solver::material::{sphere_mass, PairParams};
 use dem_verify::solver::two_body;
@@ -45,7 +45,7 @@ fn vec_at(s: &Series, row: usize, name: &str) -> [f64; 3] {
 }
 
 fn rolling_cases(name: &str) -> Vec<Case> {
-    contact_runs(name, None, "all").unwrap()
+    contact_runs(name, None, RollingChoice::All).unwrap()
 }
 
 /// Closed-form rolling moment on particle 1 at step n, along the prescribed spin of
@@ -202,7 +202,7 @@ fn rolling_damped_adds_the_viscous_dashpot_below_the_limit() {
 
 #[test]
 fn normal_elastic_matches_hertz_overlap_and_duration() {
-    let case = &contact_runs("normal_elastic", None, "all").unwrap()[0];
+    let case = &contact_runs("normal_elastic", None, RollingChoice::All).unwrap()[0];
     let p = PairParams::new(&case.material, &case.models, case.dt);
     let (a, b) = (&case.particles[0], &case.particles[1]);
     let m = sphere_mass(a.radius, case.material.density);
@@ -250,7 +250,7 @@ fn normal_elastic_matches_hertz_overlap_and_duration() {
 
 #[test]
 fn normal_damped_restitution_is_close_to_e() {
-    let case = &contact_runs("normal_damped", None, "all").unwrap()[0];
+    let case = &contact_runs("normal_damped", None, RollingChoice::All).unwrap()[0];
     let a = &case.particles[0];
     let v = 2.0 * (a.velocity[0].powi(2) + a.velocity[2].powi(2)).sqrt();
     for (code, s) in both(case) {
@@ -272,7 +272,7 @@ fn normal_damped_restitution_is_close_to_e() {
 #[test]
 fn tangential_spring_obeys_the_coulomb_limit() {
     for (name, must_slide) in [("tangential_stick", false), ("tangential_slip", true)] {
-        for case in contact_runs(name, None, "all").unwrap() {
+        for case in contact_runs(name, None, RollingChoice::All).unwrap() {
             let mu = case.material.friction;
             let p = PairParams::new(&case.material, &case.models, case.dt);
             let (a, b) = (&case.particles[0], &case.particles[1]);

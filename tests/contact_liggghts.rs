@@ -4,16 +4,18 @@
 
 mod common;
 
-use dem_verify::cli::{contact_runs, liggghts_contact_series, REFERENCE_STRIDE};
 use dem_verify::compare::{compare, CONTACT_RTOL};
 use dem_verify::deck::{contact_deck, run_name};
+use dem_verify::run::contact::{
+    contact_runs, liggghts_contact_series, RollingChoice, REFERENCE_STRIDE,
+};
 use dem_verify::series::{contact_series, Series};
 use dem_verify::solver::two_body;
 
 #[test]
 fn every_builtin_case_agrees_with_live_liggghts_and_the_stored_reference() {
     let lig = common::liggghts();
-    let runs = contact_runs("all", None, "all").unwrap();
+    let runs = contact_runs("all", None, RollingChoice::All).unwrap();
     assert!(
         runs.len() >= 20,
         "expected all cases x models, got {}",

@@ -1,9 +1,9 @@
 //! The native solver against the stored LIGGGHTS outputs (no LIGGGHTS needed), and the
 //! committed decks against the generator.
 
-use dem_verify::cli::{contact_runs, write_decks};
 use dem_verify::compare::{compare, CONTACT_RTOL};
 use dem_verify::deck::run_name;
+use dem_verify::run::contact::{contact_runs, write_decks, RollingChoice};
 use dem_verify::series::{contact_series, Series};
 use dem_verify::solver::two_body;
 use std::path::Path;
@@ -14,7 +14,7 @@ fn root() -> &'static Path {
 
 #[test]
 fn native_matches_stored_reference_for_every_case() {
-    for case in contact_runs("all", None, "all").unwrap() {
+    for case in contact_runs("all", None, RollingChoice::All).unwrap() {
         let name = run_name(&case);
         let stored = Series::read_csv(
             &root()

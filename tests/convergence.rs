@@ -124,6 +124,11 @@ fn convergence_refuses_inconsistent_options() {
             "--with-implicit",
         ),
         (&["--dt-factors", "1,0"][..], "--dt-factors"),
+        // one dt rule: the shear option is refused, not multiplied into the study's factors
+        (
+            &["--dt-factor", "0.5"][..],
+            "invalid value for `--dt-factor`: 0.5 (valid: 1 with verify convergence",
+        ),
     ] {
         let mut args = vec!["convergence", "--preset", "ci", "--mu-r", "1"];
         args.extend_from_slice(extra);

@@ -6,12 +6,13 @@
 
 mod common;
 
-use dem_verify::replay::{default_states, run, ReplayOutcome, ReplayRequest};
+use dem_verify::run::replay::{default_states, run, ReplayOutcome, ReplayRequest};
 use dem_verify::spec::shear::ShearCase;
 use dem_verify::spec::RollingModel;
 
 fn replay(rolling: RollingModel, mu_r: f64, eta_r: f64, e: f64) -> ReplayOutcome {
-    let mut case = ShearCase::preset("ci", rolling, mu_r, eta_r, 1).unwrap();
+    let mut case =
+        ShearCase::preset(dem_verify::spec::shear::Preset::Ci, rolling, mu_r, eta_r, 1).unwrap();
     case.material.restitution = e;
     let out = std::env::temp_dir().join(format!(
         "replay-test-{}-{mu_r}-{eta_r}-{e}",
@@ -36,7 +37,7 @@ fn replay(rolling: RollingModel, mu_r: f64, eta_r: f64, e: f64) -> ReplayOutcome
 }
 
 fn check(o: &ReplayOutcome) {
-    let table = dem_verify::replay::table(o);
+    let table = dem_verify::run::replay::table(o);
     assert_eq!(o.windows.len(), 6, "{table}");
     let phases: Vec<&str> = o.windows.iter().map(|w| w.phase.as_str()).collect();
     assert_eq!(

@@ -135,7 +135,7 @@ fn bad_shear_input_is_refused_with_reasons() {
         ),
         (
             &["--preset", "huge"],
-            "unknown preset `huge`; valid: ci, fast, paper",
+            "invalid value 'huge' for '--preset <PRESET>'\n  [possible values: ci, fast, paper]",
         ),
         (&["--speeds", "5.0"], "--allow-inertial"),
         (&["--mu-r", "nan"], "--mu-r"),

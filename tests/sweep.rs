@@ -296,10 +296,16 @@ fn sweep_refuses_bad_input() {
     for (args, field) in [
         (vec!["--mu-r=0.5,-1"], "--mu-r"),
         (vec!["--eta-r", "nan"], "--eta-r"),
-        (vec!["--engine", "fortran"], "engine"),
+        (
+            vec!["--engine", "fortran"],
+            "[possible values: native, liggghts, both]",
+        ),
         (vec!["--jobs", "0"], "--jobs"),
-        (vec!["--emit", "pbs"], "scheduler"),
-        (vec!["--preset", "huge"], "preset"),
+        (vec!["--emit", "pbs"], "[possible values: slurm]"),
+        (
+            vec!["--preset", "huge"],
+            "[possible values: ci, fast, paper]",
+        ),
         (vec!["--dt-factor", "2"], "--dt-factor"),
     ] {
         let mut a = vec!["sweep", "--seeds", "1", "--out", out.to_str().unwrap()];

@@ -47,9 +47,10 @@ pub fn read(path: &Path) -> Result<Vec<Record>> {
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(k, l)| {
-            serde_json::from_str(l).map_err(|e| Error::Parse {
+            serde_json::from_str(l).map_err(|source| Error::JsonFile {
                 path: path.to_path_buf(),
-                msg: format!("line {}: {e}", k + 1),
+                line: Some(k + 1),
+                source,
             })
         })
         .collect()

@@ -2,11 +2,15 @@
 
 pub mod bars;
 pub mod contact;
+pub mod convergence;
 pub mod history;
 pub mod html;
+pub mod nightly;
 pub mod paper;
 pub mod plot;
 pub mod progress;
+pub mod shear;
+pub mod sweep;
 pub mod vtk;
 
 use crate::compare::ChannelResult;

@@ -2,9 +2,9 @@
 //! 2022): steady mu against mu_r per eta_r and speed (their Figs 5-7), mu against shear speed
 //! (Figs 12-15), a heat map over (mu_r, eta_r), and the three conclusions checked in numbers.
 
-use crate::compare::mean_ci95;
+use crate::compare::{mean_ci95, within_cis};
 use crate::report::bars::escape;
-use crate::sweep::RunResult;
+use crate::run::sweep::RunResult;
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -138,7 +138,8 @@ pub fn critical_mu_r(curve: &[&Point]) -> Option<(f64, f64)> {
     let best = curve.iter().max_by(|a, b| a.mu.total_cmp(&b.mu))?;
     let last = curve.last()?;
     let drop = best.mu - last.mu;
-    (best.mu_r < last.mu_r && drop > ci(best) + ci(last)).then_some((best.mu_r, drop))
+    (best.mu_r < last.mu_r && drop > 0.0 && !within_cis(best.mu, ci(best), last.mu, ci(last)))
+        .then_some((best.mu_r, drop))
 }
 
 /// The three conclusions for one code's points (the paper: with eta_r = 0 mu rises with mu_r;
@@ -406,11 +407,11 @@ pub fn heat_map(title: &str, points: &[&Point]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::{CodeStage, StageResult};
+    use crate::run::sweep::{CodeStage, StageResult};
 
     fn run(mu_r: f64, eta_r: f64, seed: u64, mus: &[f64]) -> RunResult {
         RunResult {
-            run: crate::sweep::RunSpec {
+            run: crate::run::sweep::RunSpec {
                 index: 0,
                 id: format!("{mu_r}_{eta_r}_{seed}"),
                 mu_r,

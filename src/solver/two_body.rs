@@ -2,7 +2,9 @@
 //! LIGGGHTS' order of operations (Verlet::setup / Verlet::run with fix nve/sphere,
 //! fix move, pair gran and fix wall/gran). Owns all state; returns frames, does no I/O.
 
-use super::contact::{surfaces_intersect, ContactData, ContactHistory, ForceData};
+use super::contact::{
+    moved_beyond_half_skin, surfaces_intersect, ContactData, ContactHistory, ForceData,
+};
 use super::integrate::NveSphere;
 use super::kinematics::{rotation_period, FixMove};
 use super::material::{sphere_mass, PairParams};
@@ -214,11 +216,10 @@ impl<'a> Sim<'a> {
 
     /// `Neighbor::check_distance`: rebuild when any atom moved more than skin/2.
     fn needs_rebuild(&self) -> bool {
-        let trigger = 0.5 * self.skin;
-        self.bodies.iter().zip(&self.xhold).any(|(b, h)| {
-            let d = [b.s.x[0] - h[0], b.s.x[1] - h[1], b.s.x[2] - h[2]];
-            d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > trigger * trigger
-        })
+        self.bodies
+            .iter()
+            .zip(&self.xhold)
+            .any(|(b, h)| moved_beyond_half_skin(b.s.x, *h, self.skin))
     }
 
     /// Neighbour build (neigh_gran.cpp): a pair beyond `radsum + skin` leaves the list; a
@@ -303,26 +304,8 @@ impl<'a> Sim<'a> {
                         self.wall_hist[t] = None;
                         continue;
                     }
-                    let overlap = -deltan;
-                    let sdelta = [-delta[0], -delta[1], -delta[2]];
-                    let r = radi - overlap;
-                    let rinv = 1.0 / r;
-                    let mut cd = ContactData {
-                        is_wall: true,
-                        radi,
-                        radsum: radi,
-                        r,
-                        rinv,
-                        delta: sdelta,
-                        en: [sdelta[0] * rinv, sdelta[1] * rinv, sdelta[2] * rinv],
-                        deltan: overlap,
-                        meff: b.mass,
-                        mi: b.mass,
-                        v_i: b.s.v,
-                        v_j: [0.0; 3],
-                        omega_i: b.s.omega,
-                        ..Default::default()
-                    };
+                    let mut cd =
+                        ContactData::wall(radi, b.mass, delta, deltan, b.s.v, [0.0; 3], b.s.omega);
                     let hist = self.wall_hist[t].get_or_insert_with(ContactHistory::default);
                     let (fi, _, _) =
                         surfaces_intersect(&mut cd, &self.params, hist, update_history);

@@ -2,7 +2,11 @@
 //!
 //! Kernels use these instead of a linear-algebra crate so that every sum is associated as in
 //! LIGGGHTS (`a0*b0 + a1*b1 + a2*b2`, left to right): that is what makes round-off agreement
-//! possible. Nothing here allocates.
+//! possible, and why the mirrored kernels do not use nalgebra: its products and norms may
+//! associate (or fuse, or vectorise) sums differently, and one reordered sum is enough to lose
+//! the bit-identity with LIGGGHTS that the contact cases show. nalgebra is used where nothing
+//! is mirrored (the implicit dashpot's 3x3 solve, `solver::shear::implicit`). Nothing here
+//! allocates.
 
 pub type V3 = [f64; 3];
 

@@ -144,6 +144,60 @@ fn default_rolling_stiffness() -> f64 {
     2.25
 }
 
+impl Material {
+    /// Validates every constant as LIGGGHTS requires it (the one material check of the crate,
+    /// used by contact and shear cases). `cli_names` adds the command-line option to the names
+    /// of mu_r and eta_r (`--mu-r`, `--eta-r`), where a shear case takes them from.
+    pub fn validate(&self, cli_names: bool) -> Result<()> {
+        let m = self;
+        let (rf, rd) = if cli_names {
+            (
+                "material.rolling_friction (--mu-r)",
+                "material.rolling_damping (--eta-r)",
+            )
+        } else {
+            ("material.rolling_friction", "material.rolling_damping")
+        };
+        let (rf, rd) = (rf.to_string(), rd.to_string());
+        positive("material.youngs_modulus", m.youngs_modulus)?;
+        range_ge(
+            "material.youngs_modulus",
+            m.youngs_modulus,
+            5e6,
+            "LIGGGHTS requires >= 5e6 Pa in SI",
+        )?;
+        finite("material.poisson_ratio", m.poisson_ratio)?;
+        if !(0.0..0.5).contains(&m.poisson_ratio) {
+            return Err(Error::invalid(
+                "material.poisson_ratio",
+                m.poisson_ratio,
+                "0 <= nu < 0.5",
+            ));
+        }
+        positive("material.density", m.density)?;
+        finite("material.restitution", m.restitution)?;
+        if !(m.restitution > 0.05 && m.restitution <= 1.0) {
+            return Err(Error::invalid(
+                "material.restitution",
+                m.restitution,
+                "0.05 < e <= 1 (LIGGGHTS' range)",
+            ));
+        }
+        non_negative("material.friction", m.friction)?;
+        non_negative(&rf, m.rolling_friction)?;
+        non_negative(&rd, m.rolling_damping)?;
+        finite("material.rolling_stiffness", m.rolling_stiffness)?;
+        if m.rolling_stiffness < 1.0 {
+            return Err(Error::invalid(
+                "material.rolling_stiffness",
+                m.rolling_stiffness,
+                ">= 1 (LIGGGHTS epsd3 in SI units)",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Contact model composition, as in `pair_style gran model hertz tangential history ...`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -260,9 +314,9 @@ impl std::ops::Deref for Case {
 impl CaseFile {
     /// Parses TOML text; `origin` names the source in errors.
     pub fn from_toml(text: &str, origin: &Path) -> Result<Self> {
-        toml::from_str(text).map_err(|e| Error::CaseFile {
+        toml::from_str(text).map_err(|source| Error::CaseFile {
             path: origin.to_path_buf(),
-            msg: e.to_string(),
+            source,
         })
     }
 
@@ -303,41 +357,7 @@ impl CaseFile {
             ));
         }
         let m = &self.material;
-        positive("material.youngs_modulus", m.youngs_modulus)?;
-        range_ge(
-            "material.youngs_modulus",
-            m.youngs_modulus,
-            5e6,
-            "LIGGGHTS requires >= 5e6 Pa in SI",
-        )?;
-        finite("material.poisson_ratio", m.poisson_ratio)?;
-        if !(0.0..0.5).contains(&m.poisson_ratio) {
-            return Err(Error::invalid(
-                "material.poisson_ratio",
-                m.poisson_ratio,
-                "0 <= nu < 0.5",
-            ));
-        }
-        positive("material.density", m.density)?;
-        finite("material.restitution", m.restitution)?;
-        if !(m.restitution > 0.05 && m.restitution <= 1.0) {
-            return Err(Error::invalid(
-                "material.restitution",
-                m.restitution,
-                "0.05 < e <= 1 (LIGGGHTS' range)",
-            ));
-        }
-        non_negative("material.friction", m.friction)?;
-        non_negative("material.rolling_friction", m.rolling_friction)?;
-        non_negative("material.rolling_damping", m.rolling_damping)?;
-        finite("material.rolling_stiffness", m.rolling_stiffness)?;
-        if m.rolling_stiffness < 1.0 {
-            return Err(Error::invalid(
-                "material.rolling_stiffness",
-                m.rolling_stiffness,
-                ">= 1 (LIGGGHTS epsd3 in SI units)",
-            ));
-        }
+        m.validate(false)?;
         if self.models.rolling.native_only() {
             return Err(Error::invalid(
                 "models.rolling",

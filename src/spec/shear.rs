@@ -6,6 +6,99 @@ use super::{check_identifier, non_negative, positive, Material, Models, RollingM
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
+/// The built-in shear presets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Preset {
+    /// A few hundred particles, minutes: tests and the quick night.
+    Ci,
+    /// The paper's box and particles, one faster stage (I <= 1e-3): nightly runs, the map.
+    Fast,
+    /// The paper's protocol: three speeds, each to 100 % strain.
+    Paper,
+}
+
+impl Preset {
+    pub const ALL: [Preset; 3] = [Preset::Ci, Preset::Fast, Preset::Paper];
+
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Preset::Ci => "ci",
+            Preset::Fast => "fast",
+            Preset::Paper => "paper",
+        }
+    }
+
+    /// Parses a keyword; the error lists the valid ones.
+    pub fn parse(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|p| p.keyword() == s)
+            .ok_or_else(|| Error::Unknown {
+                what: "preset",
+                name: s.into(),
+                valid: "ci, fast, paper".into(),
+            })
+    }
+}
+
+impl std::fmt::Display for Preset {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.keyword())
+    }
+}
+
+/// Changes to a preset's shear protocol, shared by shear runs, sweeps (whose manifest stores
+/// them flattened) and convergence studies.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Protocol {
+    /// Shear speeds [m/s]: stages in sequence (replaces the preset's stages).
+    pub speeds: Option<Vec<f64>>,
+    /// Shear strain of each stage (replaces the preset's).
+    pub strain: Option<f64>,
+    /// Time step as a multiple of the preset's ([`ShearCase::scale_dt`]).
+    pub dt_factor: f64,
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        Protocol {
+            speeds: None,
+            strain: None,
+            dt_factor: 1.0,
+        }
+    }
+}
+
+/// Changes to a preset's sample, plates and material.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Overrides {
+    /// Particle snapshots every N steps (0: the preset's choice).
+    pub snapshot_every: u64,
+    /// Normal restitution (0.05 < e <= 1).
+    pub restitution: Option<f64>,
+    /// Flat plates instead of teeth.
+    pub flat_plates: bool,
+    pub tooth_height: Option<f64>,
+    pub tooth_wavelength: Option<f64>,
+    /// Particle count (the box scaled in x and z to keep the sample height).
+    pub particles: Option<usize>,
+}
+
+/// Everything that defines the case of one seed: what [`ShearCase::build`] turns into a case.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CaseRequest {
+    pub preset: Preset,
+    pub rolling: RollingModel,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    pub seed: u64,
+    pub protocol: Protocol,
+    pub overrides: Overrides,
+    /// Lifts the I <= 1e-3 limit.
+    pub allow_inertial: bool,
+}
+
 /// How the size-class percentages are read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -131,7 +224,7 @@ impl ShearCase {
     /// Built-in presets: `paper` (the paper's protocol), `fast` (same box and particles,
     /// faster shear within I <= 1e-3, for nightly runs), `ci` (a few hundred particles).
     pub fn preset(
-        name: &str,
+        preset: Preset,
         rolling: RollingModel,
         mu_r: f64,
         eta_r: f64,
@@ -153,6 +246,7 @@ impl ShearCase {
             rolling,
             torsion_torque: false,
         };
+        let name = preset.keyword();
         let mut c = ShearCase {
             version: 1,
             name: format!(
@@ -203,9 +297,9 @@ impl ShearCase {
             output_every: 1000,
             snapshot_every: 0,
         };
-        match name {
-            "paper" => {}
-            "fast" => {
+        match preset {
+            Preset::Paper => {}
+            Preset::Fast => {
                 c.stages = vec![Stage {
                     speed: 0.02,
                     strain: 1.0,
@@ -213,7 +307,7 @@ impl ShearCase {
                 c.output_every = 500;
                 c.snapshot_every = 50_000;
             }
-            "ci" => {
+            Preset::Ci => {
                 c.particles = 300;
                 c.box_x = 2e-3;
                 c.box_z = 1.5e-3;
@@ -225,15 +319,92 @@ impl ShearCase {
                 c.output_every = 100;
                 c.snapshot_every = 0;
             }
-            other => {
-                return Err(Error::Unknown {
-                    what: "preset",
-                    name: other.into(),
-                    valid: "ci, fast, paper".into(),
-                })
-            }
         }
         Ok(c)
+    }
+
+    /// The validated case of one seed of a request: the preset, then the request's changes,
+    /// each applied here and nowhere else (the dt factor through [`ShearCase::scale_dt`]).
+    /// Returns the case and its warnings.
+    pub fn build(r: &CaseRequest) -> Result<(Self, Vec<String>)> {
+        for (flag, v) in [("--mu-r", r.mu_r), ("--eta-r", r.eta_r)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(flag, v, "a finite number >= 0"));
+            }
+        }
+        if r.rolling == RollingModel::Off && r.mu_r > 0.0 {
+            return Err(Error::invalid("--mu-r", r.mu_r, "0 with --rolling off"));
+        }
+        let mut c = ShearCase::preset(r.preset, r.rolling, r.mu_r, r.eta_r, r.seed)?;
+        let pr = &r.protocol;
+        if let Some(speeds) = &pr.speeds {
+            let strain = pr.strain.unwrap_or(c.stages[0].strain);
+            c.stages = speeds
+                .iter()
+                .map(|&speed| Stage { speed, strain })
+                .collect();
+        } else if let Some(strain) = pr.strain {
+            for s in &mut c.stages {
+                s.strain = strain;
+            }
+        }
+        let o = &r.overrides;
+        if o.snapshot_every > 0 {
+            c.snapshot_every = o.snapshot_every;
+        }
+        if let Some(e) = o.restitution {
+            c = c.with_restitution("--restitution", e)?;
+        }
+        if o.flat_plates {
+            c.plates = Plates::Flat;
+        } else if let Plates::Teeth {
+            tooth_height,
+            tooth_wavelength,
+        } = &mut c.plates
+        {
+            if let Some(h) = o.tooth_height {
+                *tooth_height = h;
+            }
+            if let Some(w) = o.tooth_wavelength {
+                *tooth_wavelength = w;
+            }
+        }
+        if let Some(n) = o.particles {
+            if n < 10 {
+                return Err(Error::invalid("--particles", n, ">= 10"));
+            }
+            // same area per particle (so the same height); box_x a whole number of teeth
+            let area = c.box_x * c.box_z * n as f64 / c.particles as f64;
+            let scale = (n as f64 / c.particles as f64).sqrt();
+            let w = match &c.plates {
+                Plates::Teeth {
+                    tooth_wavelength, ..
+                } => *tooth_wavelength,
+                Plates::Flat => c.box_x / 8.0,
+            };
+            c.box_x = (c.box_x * scale / w).round().max(1.0) * w;
+            c.box_z = area / c.box_x;
+            c.particles = n;
+        }
+        c = c.scale_dt("--dt-factor", pr.dt_factor)?;
+        let w = c.validate(r.allow_inertial)?;
+        Ok((c, w))
+    }
+
+    /// The case at `factor` times its time step, covering the same physical time and strain:
+    /// compression steps, output and snapshot intervals scale with 1 / factor (output at least
+    /// every step). The one dt-scaling rule of the crate; `flag` names the option in errors.
+    pub fn scale_dt(mut self, flag: &str, factor: f64) -> Result<Self> {
+        if !(factor.is_finite() && factor > 0.0 && factor <= 1.0) {
+            return Err(Error::invalid(flag, factor, "a number in (0, 1]"));
+        }
+        if factor != 1.0 {
+            self.dt *= factor;
+            self.compression_steps = (self.compression_steps as f64 / factor).round() as u64;
+            self.output_every = ((self.output_every as f64 / factor).round() as u64).max(1);
+            self.snapshot_every = (self.snapshot_every as f64 / factor).round() as u64;
+        }
+        Ok(self)
     }
 
     /// The case with normal restitution `e` (LIGGGHTS: 0.05 < e <= 1), its name marked with
@@ -396,25 +567,7 @@ impl ShearCase {
             }
         }
         let m = &self.material;
-        positive("material.youngs_modulus", m.youngs_modulus)?;
-        if !(0.0..0.5).contains(&m.poisson_ratio) {
-            return Err(Error::invalid(
-                "material.poisson_ratio",
-                m.poisson_ratio,
-                "0 <= nu < 0.5",
-            ));
-        }
-        positive("material.density", m.density)?;
-        if !(m.restitution > 0.05 && m.restitution <= 1.0) {
-            return Err(Error::invalid(
-                "material.restitution",
-                m.restitution,
-                "0.05 < e <= 1 (LIGGGHTS' range)",
-            ));
-        }
-        non_negative("material.friction", m.friction)?;
-        non_negative("material.rolling_friction (--mu-r)", m.rolling_friction)?;
-        non_negative("material.rolling_damping (--eta-r)", m.rolling_damping)?;
+        m.validate(true)?;
         if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {
             return Err(Error::invalid(
                 "material.rolling_damping (--eta-r)",
@@ -423,13 +576,6 @@ impl ShearCase {
                     "0 with rolling model `{}`: eta_r acts only in epsd and epsd3",
                     self.models.rolling
                 ),
-            ));
-        }
-        if m.rolling_stiffness < 1.0 || !m.rolling_stiffness.is_finite() {
-            return Err(Error::invalid(
-                "material.rolling_stiffness",
-                m.rolling_stiffness,
-                ">= 1",
             ));
         }
         positive("dt", self.dt)?;
@@ -539,11 +685,11 @@ mod tests {
 
     #[test]
     fn presets_validate_and_number_fractions_give_paper_height() {
-        for p in ["paper", "fast", "ci"] {
+        for p in Preset::ALL {
             let c = ShearCase::preset(p, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
             c.validate(false).unwrap();
         }
-        let c = ShearCase::preset("paper", RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+        let c = ShearCase::preset(Preset::Paper, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
         let counts = c.class_counts();
         assert_eq!(counts.iter().sum::<usize>(), 2500);
         assert_eq!(counts, vec![350, 725, 1425]);
@@ -557,14 +703,14 @@ mod tests {
 
     #[test]
     fn eta_r_with_epsd2_is_refused() {
-        let c = ShearCase::preset("ci", RollingModel::Epsd2, 0.5, 0.5, 1).unwrap();
+        let c = ShearCase::preset(Preset::Ci, RollingModel::Epsd2, 0.5, 0.5, 1).unwrap();
         let e = c.validate(false).unwrap_err().to_string();
         assert!(e.contains("eta_r acts only in epsd and epsd3"), "{e}");
     }
 
     #[test]
     fn inertial_limit_and_servo_checks() {
-        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
         c.stages[0].speed = 10.0;
         assert!(c
             .validate(false)
@@ -572,21 +718,21 @@ mod tests {
             .to_string()
             .contains("--allow-inertial"));
         assert!(c.validate(true).is_ok());
-        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
         c.servo.vel_max = 100.0;
         assert!(c
             .validate(false)
             .unwrap_err()
             .to_string()
             .contains("skin / (2 dt)"));
-        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
         c.normal_stress = 0.0;
         assert!(c
             .validate(false)
             .unwrap_err()
             .to_string()
             .contains("normal_stress"));
-        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 1).unwrap();
         c.box_x = 0.5e-3;
         assert!(c.validate(false).unwrap_err().to_string().contains("box_x"));
     }

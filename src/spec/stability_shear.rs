@@ -29,7 +29,7 @@
 
 use super::shear::ShearCase;
 use super::{rayleigh_time, RollingModel};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Rolling contacts per grain assumed by the criterion.
 pub const ROLLING_CONTACTS: f64 = 4.0;
@@ -37,7 +37,7 @@ const PHI: f64 = 0.6;
 const Z: f64 = 5.0;
 
 /// Figures of one contact kind.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StabilityEntry {
     /// e.g. `0.1mm-0.2mm` or `0.1mm-wall`.
     pub contact: String,
@@ -52,7 +52,7 @@ pub struct StabilityEntry {
 }
 
 /// All figures of a case, worst first.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StabilityReport {
     pub dt: f64,
     pub rolling: String,
@@ -60,21 +60,25 @@ pub struct StabilityReport {
     pub stable: bool,
 }
 
+/// The rolling stiffness of `model`, from the kernels' own formulas.
 fn rolling_stiffness(model: RollingModel, kn: f64, kt: f64, mu_r: f64, k3: f64, reff: f64) -> f64 {
+    use crate::solver::contact::rolling::{epsd, epsd2, epsd3};
     match model {
-        RollingModel::Epsd | RollingModel::EpsdImplicit => 2.25 * kn * mu_r * mu_r * reff * reff,
-        RollingModel::Epsd3 => k3 * kn * mu_r * mu_r * reff * reff,
-        RollingModel::Epsd2 => kt * reff * reff,
+        RollingModel::Epsd | RollingModel::EpsdImplicit => epsd::stiffness(kn, mu_r, reff),
+        RollingModel::Epsd3 => epsd3::stiffness(k3, kn, mu_r, reff),
+        RollingModel::Epsd2 => epsd2::stiffness(kt, reff),
         RollingModel::Cdt | RollingModel::Off => 0.0,
     }
 }
 
 pub fn stability(case: &ShearCase) -> StabilityReport {
+    use crate::solver::contact::rolling::{pair_reff, pair_rolling_inertia, wall_rolling_inertia};
     let m = &case.material;
-    let e_star = m.youngs_modulus / (2.0 * (1.0 - m.poisson_ratio * m.poisson_ratio));
-    let g_star = m.youngs_modulus / (4.0 * (2.0 - m.poisson_ratio) * (1.0 + m.poisson_ratio));
+    // E* = Yeff and G* = Geff of the material with itself, as the kernels use them
+    let pp = crate::solver::material::PairParams::new(m, &case.models, case.dt);
+    let (e_star, g_star) = (pp.y_eff, pp.g_eff);
     let dt = case.dt;
-    let mass = |r: f64| 4.0 / 3.0 * std::f64::consts::PI * r * r * r * m.density;
+    let mass = |r: f64| crate::solver::material::sphere_mass(r, m.density);
     let mut radii = case.radii.clone();
     radii.sort_by(f64::total_cmp);
     let mut entries = Vec::new();
@@ -84,17 +88,24 @@ pub fn stability(case: &ShearCase) -> StabilityReport {
                 let (mi, mj) = (mass(ri), mass(rj));
                 let (ai, aj) = (mi * ri * ri, mj * rj * rj);
                 (
-                    ri * rj / (ri + rj),
+                    pair_reff(ri, rj),
                     mi * mj / (mi + mj),
                     0.5 * (ri + rj),
                     0.4 * ai * aj / (ai + aj),
-                    1.4 * ai * aj / (ai + aj),
+                    pair_rolling_inertia(mi, ri, mj, rj),
                     ri.min(rj),
                 )
             }
             None => {
                 let mi = mass(ri);
-                (ri, mi, ri, 0.4 * mi * ri * ri, 1.4 * mi * ri * ri, ri)
+                (
+                    ri,
+                    mi,
+                    ri,
+                    0.4 * mi * ri * ri,
+                    wall_rolling_inertia(mi, ri),
+                    ri,
+                )
             }
         };
         let force = 4.0 * std::f64::consts::PI * r_mean * r_mean * case.normal_stress / (PHI * Z);
@@ -209,11 +220,26 @@ mod tests {
 
     #[test]
     fn paper_parameters_with_viscous_rolling_are_flagged() {
-        let c = ShearCase::preset("paper", RollingModel::Epsd, 1.0, 0.5, 1).unwrap();
+        let c = ShearCase::preset(
+            crate::spec::shear::Preset::Paper,
+            RollingModel::Epsd,
+            1.0,
+            0.5,
+            1,
+        )
+        .unwrap();
         let r = stability(&c);
         assert!(!r.stable, "{:?}", r.lines(3));
-        let undamped =
-            stability(&ShearCase::preset("paper", RollingModel::Epsd, 0.25, 0.0, 1).unwrap());
+        let undamped = stability(
+            &ShearCase::preset(
+                crate::spec::shear::Preset::Paper,
+                RollingModel::Epsd,
+                0.25,
+                0.0,
+                1,
+            )
+            .unwrap(),
+        );
         assert!(undamped.stable, "{:?}", undamped.lines(3));
         assert_eq!(r.entries.len(), 9);
     }

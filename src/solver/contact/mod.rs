@@ -98,6 +98,49 @@ impl ContactData {
             ..Default::default()
         }
     }
+
+    /// A sphere touching a wall triangle as fix_wall_gran.cpp `post_force_mesh` sets it up:
+    /// `deltan = d - r_i` from the triangle test (`resolveTriSphereContactBary`), the contact
+    /// `delta` negated, `r = r_i - overlap`, `rinv = 1/r`, `en = delta rinv`, `meff = m_i`,
+    /// the wall's velocity at the contact point `v_wall`.
+    pub fn wall(
+        radi: f64,
+        mi: f64,
+        delta_to_wall: V3,
+        deltan: f64,
+        v_i: V3,
+        v_wall: V3,
+        omega_i: V3,
+    ) -> Self {
+        let overlap = -deltan;
+        let sdelta = [-delta_to_wall[0], -delta_to_wall[1], -delta_to_wall[2]];
+        let r = radi - overlap;
+        let rinv = 1.0 / r;
+        ContactData {
+            is_wall: true,
+            radi,
+            radsum: radi,
+            r,
+            rinv,
+            delta: sdelta,
+            en: [sdelta[0] * rinv, sdelta[1] * rinv, sdelta[2] * rinv],
+            deltan: overlap,
+            meff: mi,
+            mi,
+            v_i,
+            v_j: v_wall,
+            omega_i,
+            ..Default::default()
+        }
+    }
+}
+
+/// `Neighbor::check_distance` for one atom: it moved more than skin/2 since the last build
+/// (`|x - x_hold|^2 > (skin/2)^2`, evaluated as LIGGGHTS does).
+pub fn moved_beyond_half_skin(x: V3, hold: V3, skin: f64) -> bool {
+    let trigger = 0.5 * skin;
+    let d = [x[0] - hold[0], x[1] - hold[1], x[2] - hold[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > trigger * trigger
 }
 
 /// Force and torque increments of one partner (LIGGGHTS `ForceData`).

@@ -10,10 +10,16 @@
 //! plate contacts in feature order; plate totals are summed in particle order. Results are
 //! bit-identical for any number of threads (tested).
 
+mod implicit;
 pub mod neighbor;
+mod observe;
 pub mod plate;
+mod rebuild;
 pub mod replay;
 pub mod servo;
+mod walls;
+
+pub use observe::{PlateRecord, Snapshot};
 
 use super::contact::{surfaces_intersect, ContactData, ForceData};
 use super::integrate::NveSphere;
@@ -23,6 +29,7 @@ use super::vec3::V3;
 use crate::error::{Error, Result};
 use crate::packing::Packing;
 use crate::spec::shear::ShearCase;
+use implicit::add_dashpot;
 use neighbor::{NeighborList, Periodic};
 use plate::{plate_triangles, Plate, Side};
 use rayon::prelude::*;
@@ -50,48 +57,25 @@ fn image_shift(k: u8, lx: f64, lz: f64) -> V3 {
     [ix * lx, 0.0, iz * lz]
 }
 
+/// The state of a listed pair after the force loop.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum PairContact {
+    #[default]
+    Apart,
+    Touching,
+    /// Touching, with the rolling resistance at full mobilisation.
+    RollingMobilised,
+}
+
 /// Per pair, from the force loop: the implicit dashpot's coefficient and contact normal, and
-/// the contact state (0 apart, 1 touching, 2 touching with the rolling resistance at full
-/// mobilisation).
+/// the contact state.
 #[derive(Clone, Copy, Debug, Default)]
 struct PairAux {
     damping: f64,
     en: V3,
-    contact: u8,
+    contact: PairContact,
     /// The tangential force is at the Coulomb limit `mu_p |Fn|` (to 1e-9, a label only).
     sliding: bool,
-}
-
-/// One output record (SI units).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PlateRecord {
-    pub step: u64,
-    /// Force of the particles on the top plate [N].
-    pub top_force: [f64; 3],
-    /// Force of the particles on the bottom plate [N].
-    pub bottom_force: [f64; 3],
-    /// y of the top plate's base [m].
-    pub top_y: f64,
-    /// Displacement of the bottom plate along x since shearing began [m].
-    pub shear_displacement: f64,
-    /// Translational and rotational kinetic energy [J].
-    pub ke: f64,
-    pub erot: f64,
-    /// Fraction of touching particle-particle contacts whose rolling resistance is at full
-    /// mobilisation (NaN without touching pairs; 0 without a rolling model).
-    pub mobilised: f64,
-}
-
-/// Particle state for snapshots.
-#[derive(Clone, Debug)]
-pub struct Snapshot {
-    pub step: u64,
-    pub x: Vec<[f64; 3]>,
-    pub v: Vec<[f64; 3]>,
-    pub omega: Vec<[f64; 3]>,
-    pub radius: Vec<f64>,
-    /// Accumulated rotation vector, integral of omega dt [rad].
-    pub rotation: Vec<[f64; 3]>,
 }
 
 /// The shear box state and time loop.
@@ -114,9 +98,6 @@ pub struct ShearSim {
     pair_force: Vec<(ForceData, ForceData)>,
     /// epsd_implicit: per pair the dashpot coefficient and contact normal.
     pair_damp: Vec<PairAux>,
-    /// DEM_DEBUG_WALL set: print every particle-triangle contact (read once: an environment
-    /// lookup per contact cost several per cent of the step).
-    debug_wall: bool,
     /// epsd_implicit: per particle `A = sum C P` (symmetric: xx yy zz xy xz yz) and
     /// `B = sum C P w_j` of its rolling dashpots, for the implicit final half-kick.
     imp: Vec<([f64; 6], V3)>,
@@ -191,7 +172,6 @@ impl ShearSim {
             xhold: packing.position.clone(),
             pair_force: Vec::new(),
             pair_damp: Vec::new(),
-            debug_wall: std::env::var_os("DEM_DEBUG_WALL").is_some(),
             imp: vec![([0.0; 6], [0.0; 3]); n],
             implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
             wall: vec![WallSlots::default(); n],
@@ -233,92 +213,6 @@ impl ShearSim {
         self.servo.setup();
         self.top_base0 = self.top.base_y;
         self.top_orig = self.meshes[1].tris.iter().map(|t| t.nodes).collect();
-    }
-
-    /// Current sample height: distance between the plates' mean surfaces [m].
-    pub fn height(&self) -> f64 {
-        self.top.base_y - self.bottom.base_y - self.case.plates.tooth_height()
-    }
-
-    pub fn record(&self) -> PlateRecord {
-        let ke = (0..self.x.len())
-            .map(|i| {
-                let v = self.v[i];
-                0.5 * self.mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-            })
-            .sum();
-        let erot = (0..self.x.len())
-            .map(|i| {
-                let w = self.omega[i];
-                0.5 * 0.4
-                    * self.mass[i]
-                    * self.radius[i]
-                    * self.radius[i]
-                    * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-            })
-            .sum();
-        let (touching, mobilised) = self.pair_damp.iter().fold((0usize, 0usize), |(t, m), a| {
-            (
-                t + usize::from(a.contact > 0),
-                m + usize::from(a.contact == 2),
-            )
-        });
-        PlateRecord {
-            mobilised: mobilised as f64 / touching as f64,
-            step: self.step,
-            top_force: self.top_force,
-            bottom_force: self.bottom_force,
-            top_y: self.top.base_y,
-            shear_displacement: self.shear_displacement,
-            ke,
-            erot,
-        }
-    }
-
-    pub fn snapshot(&self) -> Snapshot {
-        Snapshot {
-            step: self.step,
-            x: self.x.clone(),
-            v: self.v.clone(),
-            omega: self.omega.clone(),
-            radius: self.radius.clone(),
-            rotation: self.rotation.clone(),
-        }
-    }
-
-    /// The current state as an initial state for a new run of both codes (positions wrapped
-    /// into the box, velocities, angular velocities, top plate position). Contact histories
-    /// and the servo's state start afresh, in LIGGGHTS as here.
-    pub fn state(&self, like: &Packing) -> Packing {
-        let (lx, lz) = (self.box_.lx, self.box_.lz);
-        Packing {
-            radius: like.radius.clone(),
-            position: self
-                .x
-                .iter()
-                .map(|p| [p[0].rem_euclid(lx), p[1], p[2].rem_euclid(lz)])
-                .collect(),
-            velocity: self.v.clone(),
-            omega: self.omega.clone(),
-            top_y: self.top.base_y,
-            box_y_hi: like.box_y_hi,
-            box_y_lo: like.box_y_lo,
-        }
-    }
-
-    /// The listed pairs.
-    pub fn pairs(&self) -> &[neighbor::Pair] {
-        &self.nl.pairs
-    }
-
-    /// Current force on every particle [N].
-    pub fn forces(&self) -> &[[f64; 3]] {
-        &self.f
-    }
-
-    /// Neighbour rebuilds so far.
-    pub fn neighbor_builds(&self) -> u64 {
-        self.nl.builds
     }
 
     /// One time step.
@@ -386,153 +280,6 @@ impl ShearSim {
         }
     }
 
-    /// `Neighbor::decide` with `delay 0`: a rebuild a plate asked for at the previous step
-    /// (`next_reneighbor`), else every `neighbor.every` steps since the last build, and with
-    /// `check` only if an atom moved more than skin/2 (`check_distance`).
-    fn decide_rebuild(&mut self) -> bool {
-        if self.mesh_rebuild_pending {
-            return true;
-        }
-        self.ago += 1;
-        let sched = &self.case.neighbor;
-        self.ago.is_multiple_of(sched.every) && (!sched.check || self.particles_moved())
-    }
-
-    /// `Neighbor::check_distance`: some atom moved more than skin/2 since the last build.
-    fn particles_moved(&self) -> bool {
-        let trigger = 0.5 * self.case.skin;
-        let t2 = trigger * trigger;
-        self.x
-            .par_iter()
-            .zip(self.xhold.par_iter())
-            .with_min_len(LIGHT_CHUNK)
-            .any(|(x, h)| {
-                let d = [x[0] - h[0], x[1] - h[1], x[2] - h[2]];
-                d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > t2
-            })
-    }
-
-    /// `MultiNodeMesh::decideRebuild` for both plates: a node moved more than skin/2 since the
-    /// last build (every node of a plate moves by the same vector).
-    fn plates_moved(&self) -> bool {
-        let trigger = 0.5 * self.case.skin;
-        (self.bottom.offset_x - self.bottom_hold).abs() > trigger
-            || (self.top.base_y - self.top_hold).abs() > trigger
-    }
-
-    /// Wraps positions into the periodic box (LAMMPS `domain->pbc()`) and rebuilds the list.
-    fn rebuild(&mut self) {
-        let (lx, lz) = (self.box_.lx, self.box_.lz);
-        for x in &mut self.x {
-            if x[0] < 0.0 {
-                x[0] += lx;
-            } else if x[0] >= lx {
-                x[0] -= lx;
-            }
-            if x[2] < 0.0 {
-                x[2] += lz;
-            } else if x[2] >= lz {
-                x[2] -= lz;
-            }
-        }
-        self.nl
-            .build(&self.x, &self.radius, self.case.skin, self.box_);
-        self.rebuild_plates();
-        self.build_wall_candidates();
-        self.xhold.clone_from(&self.x);
-        self.pair_force
-            .resize(self.nl.pairs.len(), Default::default());
-        self.pair_damp
-            .resize(self.nl.pairs.len(), PairAux::default());
-    }
-
-    /// The plates' part of a rebuild: the bottom mesh's elements wrapped into the box
-    /// (FixMesh::pre_force, `pbcExchangeBorders`), the surface properties recomputed from the
-    /// moved nodes (`refreshOwned`), node positions and build counter kept
-    /// for the next decision (`storeNodePosRebuild`, `Neighbor::build` sets `ago = 0`).
-    fn rebuild_plates(&mut self) {
-        self.meshes[0].wrap_x(self.box_.lx);
-        for m in &mut self.meshes {
-            m.refresh_surface_properties();
-        }
-        self.ago = 0;
-        self.mesh_rebuild_pending = false;
-        self.bottom_hold = self.bottom.offset_x;
-        self.top_hold = self.top.base_y;
-    }
-
-    /// Per particle, the (mesh, triangle, image) within reach until the next rebuild: the
-    /// triangle's plane within `r + skin` and its bounding sphere within `r_bound + r + skin`
-    /// (LIGGGHTS' test), ordered as LIGGGHTS loops: bottom mesh then top, the triangle itself
-    /// before its images, by triangle id.
-    ///
-    /// Not in LIGGGHTS: a candidate must also have its bounding box within `r + skin`. The
-    /// plates' triangles are strips across the whole box, so the bounding sphere admits faces
-    /// two teeth away whose plane happens to pass near the particle; the box test drops them.
-    /// It only drops triangles that cannot be touched before the next rebuild (a particle
-    /// and a plate each move less than `skin / 2` until then, and the box distance is a lower
-    /// bound of the triangle distance), and it keeps the order of the others, so the contacts
-    /// found and the order their forces are summed in are unchanged: bitwise the same
-    /// results, fewer sphere-triangle tests per step.
-    fn build_wall_candidates(&mut self) {
-        let (lx, lz, skin) = (self.box_.lx, self.box_.lz, self.case.skin);
-        let meshes = &self.meshes;
-        let y_range: Vec<(f64, f64)> = meshes
-            .iter()
-            .map(|m| {
-                m.tris
-                    .iter()
-                    .flat_map(|t| t.nodes.iter().map(|n| n[1]))
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| {
-                        (lo.min(y), hi.max(y))
-                    })
-            })
-            .collect();
-        let per: Vec<Vec<(u8, u32, u8)>> = self
-            .x
-            .par_iter()
-            .zip(self.radius.par_iter())
-            .map(|(p, r)| {
-                let mut c = Vec::new();
-                for (m, mesh) in meshes.iter().enumerate() {
-                    // a particle farther than r + skin from the mesh's y extent has no
-                    // candidate in it (each triangle's box test would fail): skip the mesh
-                    let (ylo, yhi) = y_range[m];
-                    if p[1] < ylo - (r + skin) * (1.0 + 1e-9)
-                        || p[1] > yhi + (r + skin) * (1.0 + 1e-9)
-                    {
-                        continue;
-                    }
-                    for img in [4u8, 0, 1, 2, 3, 5, 6, 7, 8] {
-                        let s = image_shift(img, lx, lz);
-                        for (t, (cen, rb)) in mesh.center.iter().zip(&mesh.r_bound).enumerate() {
-                            let d = [p[0] - cen[0] - s[0], p[1] - cen[1], p[2] - cen[2] - s[2]];
-                            let reach = rb + r + skin;
-                            // resolveTriSphereNeighbuild: plane distance first, then bounds
-                            let n = mesh.tris[t].normal;
-                            let plane = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).abs();
-                            if plane <= r + skin
-                                && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= reach * reach
-                                && box_distance_sq(p, &mesh.tris[t].nodes, s)
-                                    <= (r + skin) * (r + skin) * (1.0 + 1e-9)
-                            {
-                                c.push((m as u8, t as u32, img));
-                            }
-                        }
-                    }
-                }
-                c
-            })
-            .collect();
-        self.wall_start.clear();
-        self.wall_start.push(0);
-        self.wall_cand.clear();
-        for c in per {
-            self.wall_cand.extend(c);
-            self.wall_start.push(self.wall_cand.len() as u32);
-        }
-    }
-
     fn compute_forces(&mut self, update_history: bool) -> Result<()> {
         let params = &self.params;
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
@@ -567,7 +314,11 @@ impl ShearSim {
                 *damp = PairAux {
                     damping: o.implicit_damping,
                     en: cd.en,
-                    contact: if o.rolling_mobilised { 2 } else { 1 },
+                    contact: if o.rolling_mobilised {
+                        PairContact::RollingMobilised
+                    } else {
+                        PairContact::Touching
+                    },
                     sliding: ft2 >= cap * cap * (1.0 - 1e-9),
                 };
             });
@@ -576,13 +327,26 @@ impl ShearSim {
         let pf = &self.pair_force;
         let pd = &self.pair_damp;
         let implicit = self.implicit;
-        let debug_wall = self.debug_wall;
         let torsion = params.torsion_torque;
-        let meshes = &self.meshes;
-        let (cand, cstart) = (&self.wall_cand, &self.wall_start);
-        let (lx, lz) = (self.box_.lx, self.box_.lz);
-        // node velocities: move/mesh linear (bottom), servo vcm (top)
-        let vnode = [[self.bottom_node_v, 0.0, 0.0], self.servo.vcm];
+        let walls = walls::WallContext {
+            params,
+            meshes: &self.meshes,
+            cand: &self.wall_cand,
+            cstart: &self.wall_start,
+            lx: self.box_.lx,
+            lz: self.box_.lz,
+            // node velocities: move/mesh linear (bottom), servo vcm (top)
+            vnode: [[self.bottom_node_v, 0.0, 0.0], self.servo.vcm],
+            x,
+            v,
+            omega,
+            radius,
+            mass,
+            implicit,
+            torsion,
+            update_history,
+            trace: log::log_enabled!(log::Level::Trace),
+        };
         let failed = std::sync::atomic::AtomicBool::new(false);
         self.f
             .par_iter_mut()
@@ -619,148 +383,8 @@ impl ShearSim {
                         t[c] += fd.delta_torque[c];
                     }
                 }
-                *wf = ([0.0; 3], [0.0; 3]);
-                for m in 0..2u8 {
-                    // markAllContacts of this mesh
-                    for r in &mut slots.rec[..slots.n as usize] {
-                        if r.mesh == m {
-                            r.keep = false;
-                        }
-                    }
-                    let mesh = &meshes[m as usize];
-                    for &(cm, tri, img) in &cand[cstart[q] as usize..cstart[q + 1] as usize] {
-                        if cm != m {
-                            continue;
-                        }
-                        let shift = image_shift(img, lx, lz);
-                        if mesh.beyond_plane(tri as usize, shift, x[q], radius[q]) {
-                            continue;
-                        }
-                        let Some(hit) = mesh.resolve(tri as usize, shift, x[q]) else {
-                            continue;
-                        };
-                        let deltan = hit.d - radius[q];
-                        if deltan > 0.0 {
-                            continue;
-                        }
-                        // handleContact
-                        let n = slots.n as usize;
-                        let slot = match (0..n)
-                            .find(|&i| slots.rec[i].mesh == m && slots.rec[i].tri == tri)
-                        {
-                            Some(i) => {
-                                slots.rec[i].keep = true;
-                                i
-                            }
-                            None => {
-                                let cop = &mesh.coplanar[tri as usize];
-                                if hit.face
-                                    && (0..n).any(|i| {
-                                        slots.rec[i].mesh == m
-                                            && slots.rec[i].keep
-                                            && cop.contains(&slots.rec[i].tri)
-                                    })
-                                {
-                                    continue;
-                                }
-                                if n == MAX_WALL_CONTACTS {
-                                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
-                                    return;
-                                }
-                                let mut rec = TriContactRecord {
-                                    mesh: m,
-                                    tri,
-                                    keep: true,
-                                    ..Default::default()
-                                };
-                                if hit.face {
-                                    for i in 0..n {
-                                        if slots.rec[i].mesh == m && cop.contains(&slots.rec[i].tri)
-                                        {
-                                            rec.hist = slots.rec[i].hist;
-                                        }
-                                    }
-                                }
-                                slots.rec[n] = rec;
-                                slots.n += 1;
-                                n
-                            }
-                        };
-                        let vn = vnode[m as usize];
-                        let b = hit.bary;
-                        let vw = [
-                            b[0] * vn[0] + b[1] * vn[0] + b[2] * vn[0],
-                            b[0] * vn[1] + b[1] * vn[1] + b[2] * vn[1],
-                            b[0] * vn[2] + b[1] * vn[2] + b[2] * vn[2],
-                        ];
-                        let overlap = -deltan;
-                        let sdelta = [-hit.delta[0], -hit.delta[1], -hit.delta[2]];
-                        let r = radius[q] - overlap;
-                        let rinv = 1.0 / r;
-                        let mut cd = ContactData {
-                            is_wall: true,
-                            radi: radius[q],
-                            radsum: radius[q],
-                            r,
-                            rinv,
-                            delta: sdelta,
-                            en: [sdelta[0] * rinv, sdelta[1] * rinv, sdelta[2] * rinv],
-                            deltan: overlap,
-                            meff: mass[q],
-                            mi: mass[q],
-                            v_i: v[q],
-                            v_j: vw,
-                            omega_i: omega[q],
-                            ..Default::default()
-                        };
-                        if debug_wall {
-                            eprintln!(
-                                "wall p {} mesh {m} tri {tri} img {img} face {} d {:e} cp {:e} {:e} {:e}",
-                                q + 1,
-                                hit.face,
-                                hit.d,
-                                x[q][0] + hit.delta[0],
-                                x[q][1] + hit.delta[1],
-                                x[q][2] + hit.delta[2]
-                            );
-                        }
-                        let mut hist = slots.rec[slot].hist;
-                        let (fi, _, o) =
-                            surfaces_intersect(&mut cd, params, &mut hist, update_history);
-                        if implicit && o.implicit_damping != 0.0 {
-                            // walls do not rotate; the dashpot acts on wr = cr omega_i / r
-                            add_dashpot(
-                                imp,
-                                o.implicit_damping * cd.cri * cd.rinv,
-                                cd.en,
-                                torsion,
-                                [0.0; 3],
-                            );
-                        }
-                        slots.rec[slot].hist = hist;
-                        slots.rec[slot].force = fi.delta_f;
-                        slots.rec[slot].torque = fi.delta_torque;
-                        slots.rec[slot].face = hit.face;
-                        let before = *f;
-                        for c in 0..3 {
-                            f[c] += fi.delta_f[c];
-                            t[c] += fi.delta_torque[c];
-                        }
-                        let dest = if m == 1 { &mut wf.1 } else { &mut wf.0 };
-                        for c in 0..3 {
-                            dest[c] += -(f[c] - before[c]);
-                        }
-                    }
-                    // cleanUpContacts of this mesh
-                    let mut k = 0;
-                    for i in 0..slots.n as usize {
-                        let r = slots.rec[i];
-                        if r.mesh != m || r.keep {
-                            slots.rec[k] = r;
-                            k += 1;
-                        }
-                    }
-                    slots.n = k as u8;
+                if !walls.particle(q, slots, f, t, wf, imp) {
+                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
                 }
             });
         if failed.into_inner() {
@@ -786,57 +410,6 @@ impl ShearSim {
             });
         }
         Ok(())
-    }
-
-    /// epsd_implicit, after the explicit half-kick of the non-dashpot torques: solves the
-    /// dashpot implicitly, `(I/h + A) w = (I/h) w* + B` with `w*` the kicked angular velocity
-    /// and `h = dt/2`; neighbours' angular velocities enter at their values during the force
-    /// computation (Jacobi), so the result does not depend on thread count. The dashpot
-    /// torque `B - A w` is added to the stored torque for the next initial half-kick: the
-    /// damping is integrated by the trapezoidal rule, A-stable for any `C_r dt / I`.
-    fn implicit_rotation(&mut self) {
-        let h = self.nve.dtf;
-        let (radius, mass) = (&self.radius, &self.mass);
-        self.omega
-            .par_iter_mut()
-            .zip(self.torque.par_iter_mut())
-            .zip(self.imp.par_iter())
-            .enumerate()
-            .for_each(|(i, ((w, t), (a, b)))| {
-                if a.iter().all(|x| *x == 0.0) {
-                    return;
-                }
-                let ih = 0.4 * mass[i] * radius[i] * radius[i] / h;
-                let m = [a[0] + ih, a[1] + ih, a[2] + ih, a[3], a[4], a[5]];
-                let rhs = [ih * w[0] + b[0], ih * w[1] + b[1], ih * w[2] + b[2]];
-                let x = solve_sym3(m, rhs);
-                let ax = sym_mul(*a, x);
-                for k in 0..3 {
-                    t[k] += b[k] - ax[k];
-                }
-                *w = x;
-            });
-    }
-
-    /// Checks the particle state for NaN (called at output steps).
-    pub fn check_finite(&self) -> Result<()> {
-        let bad = self
-            .x
-            .par_iter()
-            .zip(self.v.par_iter())
-            .position_any(|(x, v)| !(x.iter().chain(v.iter()).all(|c| c.is_finite())));
-        match bad {
-            Some(i) => Err(Error::Solver {
-                step: self.step,
-                msg: format!("particle {} has a non-finite position or velocity", i + 1),
-            }),
-            None => Ok(()),
-        }
-    }
-
-    /// Particles outside the box in y (lost in LIGGGHTS terms).
-    pub fn lost_particles(&self, y_lo: f64, y_hi: f64) -> usize {
-        self.x.iter().filter(|x| x[1] < y_lo || x[1] > y_hi).count()
     }
 }
 
@@ -876,73 +449,6 @@ pub(crate) fn pair_contact(
     ))
 }
 
-/// Squared distance from `p` to the axis-aligned bounding box of a triangle shifted by `s`.
-fn box_distance_sq(p: &V3, nodes: &[V3; 3], s: V3) -> f64 {
-    let mut d2 = 0.0;
-    for c in 0..3 {
-        let lo = nodes[0][c].min(nodes[1][c]).min(nodes[2][c]) + s[c];
-        let hi = nodes[0][c].max(nodes[1][c]).max(nodes[2][c]) + s[c];
-        let e = if p[c] < lo {
-            lo - p[c]
-        } else if p[c] > hi {
-            p[c] - hi
-        } else {
-            0.0
-        };
-        d2 += e * e;
-    }
-    d2
-}
-
-/// Adds one implicit rolling dashpot `C P` (and `C P w_other`) to a particle's system.
-fn add_dashpot(imp: &mut ([f64; 6], V3), c: f64, n: V3, torsion: bool, w_other: V3) {
-    let p = if torsion {
-        [1.0, 1.0, 1.0, 0.0, 0.0, 0.0]
-    } else {
-        [
-            1.0 - n[0] * n[0],
-            1.0 - n[1] * n[1],
-            1.0 - n[2] * n[2],
-            -n[0] * n[1],
-            -n[0] * n[2],
-            -n[1] * n[2],
-        ]
-    };
-    for k in 0..6 {
-        imp.0[k] += c * p[k];
-    }
-    let pw = sym_mul(p, w_other);
-    for k in 0..3 {
-        imp.1[k] += c * pw[k];
-    }
-}
-
-/// Symmetric 3x3 (xx yy zz xy xz yz) times a vector.
-fn sym_mul(a: [f64; 6], x: V3) -> V3 {
-    [
-        a[0] * x[0] + a[3] * x[1] + a[4] * x[2],
-        a[3] * x[0] + a[1] * x[1] + a[5] * x[2],
-        a[4] * x[0] + a[5] * x[1] + a[2] * x[2],
-    ]
-}
-
-/// Solves a symmetric positive definite 3x3 system by cofactors.
-fn solve_sym3(a: [f64; 6], b: V3) -> V3 {
-    let [xx, yy, zz, xy, xz, yz] = a;
-    let c00 = yy * zz - yz * yz;
-    let c01 = xz * yz - xy * zz;
-    let c02 = xy * yz - xz * yy;
-    let c11 = xx * zz - xz * xz;
-    let c12 = xy * xz - xx * yz;
-    let c22 = xx * yy - xy * xy;
-    let det = xx * c00 + xy * c01 + xz * c02;
-    [
-        (c00 * b[0] + c01 * b[1] + c02 * b[2]) / det,
-        (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det,
-        (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det,
-    ]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -950,7 +456,14 @@ mod tests {
     use crate::spec::RollingModel;
 
     fn run_steps(threads: usize, steps: u64) -> (Vec<[f64; 3]>, PlateRecord) {
-        let mut c = ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.5, 3).unwrap();
+        let mut c = ShearCase::preset(
+            crate::spec::shear::Preset::Ci,
+            RollingModel::Epsd,
+            0.5,
+            0.5,
+            3,
+        )
+        .unwrap();
         c.particles = 120;
         let p = loose_packing(&c);
         let pool = rayon::ThreadPoolBuilder::new()
@@ -972,43 +485,15 @@ mod tests {
     }
 
     #[test]
-    fn box_distance_is_zero_inside_and_a_lower_bound_outside() {
-        let nodes = [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0], [1.0, 0.5, 2.0]];
-        assert_eq!(box_distance_sq(&[0.5, 0.25, 1.0], &nodes, [0.0; 3]), 0.0);
-        // 0.5 beyond x = 1 and 1 below y = 0: squared distance 1.25
-        let d2 = box_distance_sq(&[1.5, -1.0, 1.0], &nodes, [0.0; 3]);
-        assert!((d2 - 1.25).abs() < 1e-15);
-        // shifted by one period in z the same point is 1 away from the box in z
-        let d2 = box_distance_sq(&[0.5, 0.25, -1.0], &nodes, [0.0, 0.0, -4.0]);
-        assert!((d2 - 1.0).abs() < 1e-15);
-        // a lower bound of the distance to every node
-        let p = [2.0, 2.0, 3.0];
-        let dmin = nodes
-            .iter()
-            .map(|n| (0..3).map(|c| (p[c] - n[c]).powi(2)).sum::<f64>())
-            .fold(f64::INFINITY, f64::min);
-        assert!(box_distance_sq(&p, &nodes, [0.0; 3]) <= dmin);
-    }
-
-    #[test]
-    fn symmetric_solve_inverts_sym_mul() {
-        let a = [4.0, 3.0, 5.0, 1.0, -0.5, 0.25];
-        let x = [0.3, -1.2, 2.0];
-        let b = sym_mul(a, x);
-        let y = solve_sym3(a, b);
-        for k in 0..3 {
-            assert!((x[k] - y[k]).abs() < 1e-14);
-        }
-        // a dashpot projects out the normal component
-        let mut imp = ([0.0; 6], [0.0; 3]);
-        add_dashpot(&mut imp, 2.0, [0.0, 1.0, 0.0], false, [1.0, 5.0, 0.0]);
-        assert_eq!(imp.0, [2.0, 0.0, 2.0, -0.0, -0.0, -0.0]);
-        assert_eq!(imp.1, [2.0, 0.0, 0.0]);
-    }
-
-    #[test]
     fn implicit_dashpot_is_bit_identical_for_any_thread_count() {
-        let mut c = ShearCase::preset("ci", RollingModel::EpsdImplicit, 1.0, 0.5, 3).unwrap();
+        let mut c = ShearCase::preset(
+            crate::spec::shear::Preset::Ci,
+            RollingModel::EpsdImplicit,
+            1.0,
+            0.5,
+            3,
+        )
+        .unwrap();
         c.particles = 120;
         let p = loose_packing(&c);
         let run = |threads: usize| {

@@ -19,7 +19,7 @@
 //! last rebuild (pair/gran/local lists touching pairs only). Such a pair starts from zero
 //! history here; it matters only if it touches again before the next rebuild.
 
-use super::{ShearSim, WallSlots, MAX_WALL_CONTACTS};
+use super::{PairContact, ShearSim, WallSlots, MAX_WALL_CONTACTS};
 use crate::error::{Error, Result};
 use crate::solver::contact::ContactHistory;
 use crate::solver::trimesh::TriContactRecord;
@@ -287,7 +287,7 @@ impl ShearSim {
             .iter()
             .zip(&probe.pair_force)
             .zip(&probe.pair_damp)
-            .filter(|(_, a)| a.contact > 0)
+            .filter(|(_, a)| a.contact != PairContact::Apart)
             .map(|((p, (fi, fj)), a)| PairObservation {
                 i: p.i,
                 j: p.j,
@@ -298,7 +298,7 @@ impl ShearSim {
                 hist: p.hist,
                 periodic: p.shift != [0.0; 3],
                 sliding: a.sliding,
-                rolling_limit: a.contact == 2,
+                rolling_limit: a.contact == PairContact::RollingMobilised,
             })
             .collect();
         let mut walls = Vec::new();

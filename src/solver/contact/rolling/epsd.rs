@@ -19,8 +19,14 @@ pub fn torque(
 ) -> (V3, bool) {
     let rmu = p.coeff_roll_frict;
     spring_dashpot(cd, nf, p, hist, update_history, |kn, reff| {
-        2.25 * kn * rmu * rmu * reff * reff
+        stiffness(kn, rmu, reff)
     })
+}
+
+/// epsd's rolling stiffness `k_r = 2.25 kn mu_r^2 reff^2`, evaluated as LIGGGHTS does
+/// (`2.25*kn*rmu*rmu*reff*reff`, left to right). Also used by the stability estimate.
+pub fn stiffness(kn: f64, mu_r: f64, reff: f64) -> f64 {
+    2.25 * kn * mu_r * mu_r * reff * reff
 }
 
 /// epsd_implicit: epsd's spring (history, limit) without the dashpot, the dashpot
@@ -37,7 +43,7 @@ pub fn spring_only(
     let r_inertia = super::rolling_inertia(cd, reff);
     let wr_tot = super::tangential_part(super::relative_rotation(cd), cd.en, p.torsion_torque);
     let rmu = p.coeff_roll_frict;
-    let kr = 2.25 * nf.kn * rmu * rmu * reff * reff;
+    let kr = stiffness(nf.kn, rmu, reff);
     let m_max = nf.fn_.abs() * reff * rmu;
     let (m, capped) = super::spring(*hist, wr_tot, kr, p.dt, m_max);
     if update_history {

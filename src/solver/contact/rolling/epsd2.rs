@@ -17,13 +17,19 @@ pub fn torque(
 ) -> (V3, bool) {
     let reff = reff(cd);
     let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
-    let kr = nf.kt * reff * reff;
+    let kr = stiffness(nf.kt, reff);
     let m_max = nf.fn_.abs() * reff * p.coeff_roll_frict;
     let (m, capped) = spring(*hist, wr_tot, kr, p.dt, m_max);
     if update_history {
         *hist = m;
     }
     (m, capped)
+}
+
+/// epsd2's rolling stiffness `k_r = kt reff^2` (`kt*reff*reff`). Also used by the stability
+/// estimate.
+pub fn stiffness(kt: f64, reff: f64) -> f64 {
+    kt * reff * reff
 }
 
 #[cfg(test)]

@@ -18,8 +18,14 @@ pub fn torque(
 ) -> (V3, bool) {
     let rmu = p.coeff_roll_frict;
     spring_dashpot(cd, nf, p, hist, update_history, |kn, reff| {
-        p.coeff_roll_stiffness * kn * rmu * rmu * reff * reff
+        stiffness(p.coeff_roll_stiffness, kn, rmu, reff)
     })
+}
+
+/// epsd3's rolling stiffness `k_r = coeffRollStiffness kn mu_r^2 reff^2`, evaluated left to
+/// right as LIGGGHTS does. Also used by the stability estimate.
+pub fn stiffness(coeff_roll_stiffness: f64, kn: f64, mu_r: f64, reff: f64) -> f64 {
+    coeff_roll_stiffness * kn * mu_r * mu_r * reff * reff
 }
 
 #[cfg(test)]

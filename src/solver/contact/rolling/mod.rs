@@ -35,25 +35,41 @@ pub fn relative_rotation(cd: &ContactData) -> V3 {
     }
 }
 
-/// `reff`: `radi` for walls, else `radi radj / (radi + radj)`.
+/// `reff`: `radi` for walls, else [`pair_reff`].
 pub fn reff(cd: &ContactData) -> f64 {
     if cd.is_wall {
         cd.radi
     } else {
-        cd.radi * cd.radj / (cd.radi + cd.radj)
+        pair_reff(cd.radi, cd.radj)
     }
 }
 
-/// Rolling inertia of epsd/epsd3 (3D): wall `1.4 mi reff^2`; pair
-/// `1.4 (mi radi^2)(mj radj^2) / (mi radi^2 + mj radj^2)`, evaluated left to right.
+/// `reff` of a pair: `radi radj / (radi + radj)`.
+pub fn pair_reff(radi: f64, radj: f64) -> f64 {
+    radi * radj / (radi + radj)
+}
+
+/// Rolling inertia of epsd/epsd3 (3D): wall [`wall_rolling_inertia`], pair
+/// [`pair_rolling_inertia`].
 pub fn rolling_inertia(cd: &ContactData, reff: f64) -> f64 {
     if cd.is_wall {
-        1.4 * cd.mi * reff * reff
+        wall_rolling_inertia(cd.mi, reff)
     } else {
-        let a = cd.mi * cd.radi * cd.radi;
-        let b = cd.mj * cd.radj * cd.radj;
-        1.4 * a * b / (a + b)
+        pair_rolling_inertia(cd.mi, cd.radi, cd.mj, cd.radj)
     }
+}
+
+/// Rolling inertia at a wall: `1.4 mi reff^2`, evaluated left to right.
+pub fn wall_rolling_inertia(mi: f64, reff: f64) -> f64 {
+    1.4 * mi * reff * reff
+}
+
+/// Rolling inertia of a pair: `1.4 (mi radi^2)(mj radj^2) / (mi radi^2 + mj radj^2)`,
+/// evaluated left to right.
+pub fn pair_rolling_inertia(mi: f64, radi: f64, mj: f64, radj: f64) -> f64 {
+    let a = mi * radi * radi;
+    let b = mj * radj * radj;
+    1.4 * a * b / (a + b)
 }
 
 /// The part of `wr` the spring sees: all of it with `torsionTorque on`, else the part

@@ -4,50 +4,39 @@
 //! timed run of the same number of steps with output only at its end; LIGGGHTS' time is its
 //! own `Loop time` of the timed run (setup and file reading excluded).
 
-use crate::cli::{utc_stamp, Outcome};
+use super::{utc_stamp, LiggghtsRequest};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::liggghts::{last_loop_time, Liggghts, LOG_NAME};
+use crate::liggghts::{last_loop_time, LOG_NAME};
 use crate::packing::{loose_packing, Packing};
 use crate::solver::shear::{compact, ShearSim};
-use crate::spec::shear::{ShearCase, Stage};
+use crate::spec::shear::{Preset, ShearCase, Stage};
 use crate::spec::RollingModel;
-use clap::Args;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
-#[derive(Args, Debug, Clone)]
-pub struct BenchArgs {
+/// A throughput measurement of both codes on the same dense state.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchRequest {
     /// Parameter preset of the state: fast or paper (same particles and materials).
-    #[arg(long, default_value = "fast")]
-    pub preset: String,
+    pub preset: Preset,
     /// Timed steps per code.
-    #[arg(long, default_value_t = 2000)]
     pub steps: u64,
     /// Native thread counts to measure.
-    #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub threads: Vec<usize>,
     /// LIGGGHTS process counts to measure (2 runs `mpirun --allow-run-as-root -np 2`).
-    #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub procs: Vec<usize>,
     /// Particle count: the 2500-particle sample tiled k x k times (rounded to a square).
-    #[arg(long, default_value_t = 2500)]
     pub particles: usize,
     /// Compression steps that make the dense state.
-    #[arg(long, default_value_t = 40_000)]
     pub compression_steps: u64,
-    /// Skip LIGGGHTS (native only).
-    #[arg(long)]
-    pub native_only: bool,
-    #[arg(long)]
-    pub liggghts: Option<PathBuf>,
-    /// Output directory (default: a new directory under ./runs/).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
+    /// LIGGGHTS (None: native only).
+    pub liggghts: Option<LiggghtsRequest>,
+    pub out: PathBuf,
 }
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BenchRow {
     pub code: String,
     /// Threads (native) or MPI processes (LIGGGHTS).
@@ -62,10 +51,12 @@ pub struct BenchRow {
     pub per_core: f64,
 }
 
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BenchReport {
-    pub preset: String,
-    pub rolling: String,
+    /// [`super::SCHEMA`].
+    pub schema: u32,
+    pub preset: Preset,
+    pub rolling: RollingModel,
     pub particles: usize,
     pub rows: Vec<BenchRow>,
     /// native 1 thread / LIGGGHTS 1 process.
@@ -130,20 +121,24 @@ pub fn tile(case: &ShearCase, p: &Packing, k: usize) -> (ShearCase, Packing) {
     (c, q)
 }
 
-pub fn bench(a: BenchArgs) -> Result<Outcome> {
+impl super::Versioned for BenchReport {
+    fn schema(&self) -> u32 {
+        self.schema
+    }
+}
+
+/// Measures, prints, writes `bench.json`; the report.
+pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     if a.steps == 0 {
         return Err(Error::invalid("--steps", 0, ">= 1"));
     }
     if a.threads.contains(&0) || a.procs.contains(&0) {
         return Err(Error::invalid("--threads/--procs", 0, ">= 1"));
     }
-    let base = ShearCase::preset(&a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
+    let base = ShearCase::preset(a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
     base.validate(false)?;
     let k = ((a.particles as f64 / base.particles as f64).sqrt().round() as usize).max(1);
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("runs").join(format!("bench-{}", utc_stamp())));
+    let out = a.out.clone();
     std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
     let rss0 = peak_rss();
     println!(
@@ -231,10 +226,9 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
             per_core: r / t as f64,
         });
     }
-    if !a.native_only {
+    if let Some(lr) = &a.liggghts {
         for &p in &a.procs {
-            let mut lig =
-                Liggghts::locate(a.liggghts.as_deref(), Duration::from_secs(7 * 24 * 3600))?;
+            let mut lig = lr.locate()?;
             if p > 1 {
                 lig.mpi_procs = Some(p);
             }
@@ -264,7 +258,7 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
     let native_vs_liggghts_1 = get("native", 1).zip(get("liggghts", 1)).map(|(a, b)| a / b);
     let native_2_vs_1 = get("native", 2).zip(get("native", 1)).map(|(a, b)| a / b);
     // one paper run: 2500 particles, the paper preset's steps
-    let paper = ShearCase::preset("paper", RollingModel::Epsd, 0.5, 0.5, 1)?;
+    let paper = ShearCase::preset(Preset::Paper, RollingModel::Epsd, 0.5, 0.5, 1)?;
     let paper_ps = paper.total_steps() as f64 * paper.particles as f64;
     let mut paper_run_hours = Vec::new();
     for r in &rows {
@@ -274,8 +268,9 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
         ));
     }
     let report = BenchReport {
-        preset: a.preset.clone(),
-        rolling: "epsd".into(),
+        schema: super::SCHEMA,
+        preset: a.preset,
+        rolling: RollingModel::Epsd,
         particles: n,
         rows,
         native_vs_liggghts_1,
@@ -304,5 +299,5 @@ pub fn bench(a: BenchArgs) -> Result<Outcome> {
         serde_json::to_string_pretty(&report)?.as_bytes(),
     )?;
     println!("bench.json: {}", out.join("bench.json").display());
-    Ok(Outcome::Agree)
+    Ok(report)
 }

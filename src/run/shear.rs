@@ -1,214 +1,88 @@
-//! `verify shear`: the paper's shear experiment in LIGGGHTS and natively from one case and
+//! The shear study: the paper's shear experiment in LIGGGHTS and natively from one case and
 //! one initial packing per seed, compared in lockstep and at steady state.
 
-use crate::cli::{utc_stamp, Outcome};
+use super::{utc_stamp, Engine, LiggghtsRequest, Verdict, SHEAR_TIMEOUT_S};
 use crate::compare::{
-    lockstep, steady, steady_window, Horizon, Steady, LOCKSTEP_RTOL, MU_ATOL, STRESS_RTOL,
+    lockstep, steady, steady_window, within_cis, Horizon, Steady, LOCKSTEP_RTOL, MU_ATOL,
+    STRESS_RTOL,
 };
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
-use crate::report::plot::{decimate, line_plot, running_mean, Curve, CurveData};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_packing, CodeRun, Row};
-use crate::spec::shear::{ShearCase, Stage};
+use crate::spec::shear::{CaseRequest, Preset, ShearCase, Stage};
 use crate::spec::RollingModel;
-use clap::Args;
 use indicatif::MultiProgress;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use std::time::Duration;
 
-#[derive(Args, Debug, Clone)]
-pub struct ShearArgs {
-    /// Rolling friction coefficient mu_r.
-    #[arg(long, default_value_t = 0.0)]
-    pub mu_r: f64,
-    /// Rolling viscous damping eta_r (epsd and epsd3 only).
-    #[arg(long, default_value_t = 0.0)]
-    pub eta_r: f64,
-    /// Rolling model (the paper's: epsd).
-    #[arg(long, default_value = "epsd")]
-    pub rolling: String,
-    /// Preset: ci (few hundred particles, minutes), fast (paper box, nightly), paper.
-    #[arg(long, default_value = "fast")]
-    pub preset: String,
-    /// Number of seeds (initial packings).
-    #[arg(long, default_value_t = 3)]
+/// A shear study: seeds of one case in the codes asked for, compared.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ShearRequest {
+    /// The case (its `seed` is the first seed).
+    pub case: CaseRequest,
+    /// Number of seeds: runs seeds case.seed ..= case.seed + seeds - 1.
     pub seeds: u64,
-    /// First seed: runs seeds first-seed ..= first-seed + seeds - 1.
-    #[arg(long, default_value_t = 1)]
-    pub first_seed: u64,
-    /// No progress bars (callers with a progress display of their own, e.g. a sweep).
-    #[arg(skip)]
-    pub hide_progress: bool,
-    #[command(flatten)]
-    pub protocol: Protocol,
+    pub engine: Engine,
     /// Threads of the native solver (default: all cores, minus one while LIGGGHTS runs).
-    #[arg(long)]
     pub threads: Option<usize>,
-    /// Output directory (default: a new directory under ./runs/).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Run only the native solver.
-    #[arg(long, conflicts_with = "liggghts_only")]
-    pub native_only: bool,
-    /// Run only LIGGGHTS.
-    #[arg(long)]
-    pub liggghts_only: bool,
-    /// Allow stages with inertial number I > 1e-3.
-    #[arg(long)]
-    pub allow_inertial: bool,
-    /// Write particle snapshots (VTK, for ParaView) every N steps (0: the preset's choice).
-    #[arg(long, default_value_t = 0)]
-    pub snapshot_every: u64,
-    /// Refuse to run (exit 2) when the explicit rolling dashpot is expected to be unstable.
-    #[arg(long)]
+    pub out: PathBuf,
+    /// No progress display or per-seed lines (callers with a display of their own).
+    pub quiet: bool,
+    /// Refuse to run when the explicit rolling dashpot is expected to be unstable.
     pub strict_stability: bool,
-    /// Flat plates instead of plates with teeth (flat plates let the gouge slip).
-    #[arg(long)]
-    pub flat_plates: bool,
-    /// Tooth height [m] of the plates (default 2e-4).
-    #[arg(long)]
-    pub tooth_height: Option<f64>,
-    /// Tooth wavelength [m] along x; box_x must hold a whole number of teeth (default 5e-4).
-    #[arg(long)]
-    pub tooth_wavelength: Option<f64>,
-    /// Particle count (the preset's box is scaled in x and z to keep the sample height).
-    #[arg(long)]
-    pub particles: Option<usize>,
-    /// Coefficient of normal restitution (the paper's Table 2: 1, no normal damping; the
-    /// presets still use 0.5). LIGGGHTS accepts 0.05 < e <= 1.
-    #[arg(long)]
-    pub restitution: Option<f64>,
-    /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (their 95 % CIs must
-    /// also overlap). The default suits 3 seeds of 2500 particles; one seed of the ci preset
-    /// fluctuates more (seed-to-seed spread about 0.03).
-    #[arg(long, default_value_t = MU_ATOL)]
+    /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (CIs must overlap too).
     pub mu_atol: f64,
-    /// Largest accepted relative deviation of each code's mean normal stress (steady window,
-    /// mean over seeds) from the target. One seed of the ci preset fluctuates by about 1-2 %.
-    #[arg(long, default_value_t = STRESS_RTOL)]
+    /// Largest accepted relative deviation of each code's mean normal stress from the target.
     pub stress_rtol: f64,
-    /// LIGGGHTS binary.
-    #[arg(long)]
-    pub liggghts: Option<PathBuf>,
-    /// Timeout of one LIGGGHTS run [s].
-    #[arg(long, default_value_t = 7 * 24 * 3600)]
-    pub timeout: u64,
+    pub liggghts: LiggghtsRequest,
 }
 
-/// Changes to a preset's shear protocol, shared by `verify shear` and `verify sweep`.
-#[derive(Args, Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Protocol {
-    /// Shear speeds [m/s], comma separated: stages in sequence, as in the paper (replaces the
-    /// preset's stages).
-    #[arg(long, value_delimiter = ',')]
-    pub speeds: Option<Vec<f64>>,
-    /// Shear strain of each stage (replaces the preset's).
-    #[arg(long)]
-    pub strain: Option<f64>,
-    /// Time step as a multiple of the preset's (compression steps and output interval scale
-    /// with 1 / factor, so the same physical time and strain are covered): runs a case at a
-    /// converged dt, e.g. 0.25.
-    #[arg(long, default_value_t = 1.0)]
-    pub dt_factor: f64,
-}
-
-impl ShearArgs {
-    /// The command line's defaults (what `verify shear` without options uses).
-    pub fn defaults() -> Self {
-        #[derive(clap::Parser)]
-        struct Wrap {
-            #[command(flatten)]
-            a: ShearArgs,
+impl ShearRequest {
+    /// The request of `case` with the command line's defaults for everything else.
+    pub fn new(case: CaseRequest, seeds: u64, engine: Engine, out: PathBuf) -> Self {
+        ShearRequest {
+            case,
+            seeds,
+            engine,
+            threads: None,
+            out,
+            quiet: false,
+            strict_stability: false,
+            mu_atol: MU_ATOL,
+            stress_rtol: STRESS_RTOL,
+            liggghts: LiggghtsRequest {
+                binary: None,
+                timeout_s: SHEAR_TIMEOUT_S,
+            },
         }
-        <Wrap as clap::Parser>::parse_from(["verify"]).a
+    }
+
+    /// The validated case of seed `seed` (built by the spec layer, once per seed).
+    pub fn seed_case(&self, seed: u64) -> Result<(ShearCase, Vec<String>)> {
+        shear_case(&self.case, seed, self.engine)
+    }
+
+    /// The seeds of the study.
+    pub fn seed_range(&self) -> std::ops::Range<u64> {
+        self.case.seed..self.case.seed + self.seeds
     }
 }
 
-/// The validated case of one seed.
-pub fn shear_case(a: &ShearArgs, seed: u64) -> Result<(ShearCase, Vec<String>)> {
-    let rolling = RollingModel::parse(&a.rolling)?;
-    if rolling.native_only() && !a.native_only {
+/// The validated case of one seed run by `engine`: [`ShearCase::build`], and the check that a
+/// native-only rolling model is not asked of LIGGGHTS.
+pub fn shear_case(c: &CaseRequest, seed: u64, engine: Engine) -> Result<(ShearCase, Vec<String>)> {
+    if c.rolling.native_only() && engine.runs_liggghts() {
         return Err(Error::invalid(
             "--rolling",
-            rolling,
+            c.rolling,
             "a LIGGGHTS model when LIGGGHTS runs; epsd_implicit exists only in the native solver (use --native-only or --engine native)",
         ));
     }
-    for (flag, v) in [("--mu-r", a.mu_r), ("--eta-r", a.eta_r)] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(Error::invalid(flag, v, "a finite number >= 0"));
-        }
-    }
-    if rolling == RollingModel::Off && a.mu_r > 0.0 {
-        return Err(Error::invalid("--mu-r", a.mu_r, "0 with --rolling off"));
-    }
-    let mut c = ShearCase::preset(&a.preset, rolling, a.mu_r, a.eta_r, seed)?;
-    let pr = &a.protocol;
-    if let Some(speeds) = &pr.speeds {
-        let strain = pr.strain.unwrap_or(c.stages[0].strain);
-        c.stages = speeds
-            .iter()
-            .map(|&speed| Stage { speed, strain })
-            .collect();
-    } else if let Some(strain) = pr.strain {
-        for s in &mut c.stages {
-            s.strain = strain;
-        }
-    }
-    if a.snapshot_every > 0 {
-        c.snapshot_every = a.snapshot_every;
-    }
-    if let Some(e) = a.restitution {
-        c = c.with_restitution("--restitution", e)?;
-    }
-    if a.flat_plates {
-        c.plates = crate::spec::shear::Plates::Flat;
-    } else if let crate::spec::shear::Plates::Teeth {
-        tooth_height,
-        tooth_wavelength,
-    } = &mut c.plates
-    {
-        if let Some(h) = a.tooth_height {
-            *tooth_height = h;
-        }
-        if let Some(w) = a.tooth_wavelength {
-            *tooth_wavelength = w;
-        }
-    }
-    if let Some(n) = a.particles {
-        if n < 10 {
-            return Err(Error::invalid("--particles", n, ">= 10"));
-        }
-        // same area per particle (so the same height); box_x a whole number of teeth
-        let area = c.box_x * c.box_z * n as f64 / c.particles as f64;
-        let scale = (n as f64 / c.particles as f64).sqrt();
-        let w = match &c.plates {
-            crate::spec::shear::Plates::Teeth {
-                tooth_wavelength, ..
-            } => *tooth_wavelength,
-            crate::spec::shear::Plates::Flat => c.box_x / 8.0,
-        };
-        c.box_x = (c.box_x * scale / w).round().max(1.0) * w;
-        c.box_z = area / c.box_x;
-        c.particles = n;
-    }
-    let f = pr.dt_factor;
-    if !(f.is_finite() && f > 0.0 && f <= 1.0) {
-        return Err(Error::invalid("--dt-factor", f, "a number in (0, 1]"));
-    }
-    if f != 1.0 {
-        c.dt *= f;
-        c.compression_steps = (c.compression_steps as f64 / f).round() as u64;
-        c.output_every = ((c.output_every as f64 / f).round() as u64).max(1);
-        c.snapshot_every = (c.snapshot_every as f64 / f).round() as u64;
-    }
-    let w = c.validate(a.allow_inertial)?;
-    Ok((c, w))
+    ShearCase::build(&CaseRequest { seed, ..c.clone() })
 }
 
 /// What is kept per seed and code so that an interrupted `verify shear` resumes.
@@ -244,7 +118,7 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
                     v[k] = r[*c];
                 }
             }
-            (*st, v)
+            Row::from_values(*st, v)
         })
         .collect();
     Some(CodeRun {
@@ -310,8 +184,10 @@ pub fn shear_lockstep(
         &c,
         &run_native(&c, &nudged, &pdir, &Progress::hidden())?,
     )?;
-    cached_lockstep(case, dir, steps)
-        .ok_or_else(|| Error::Reference(format!("lockstep results missing in {}", dir.display())))
+    cached_lockstep(case, dir, steps).ok_or_else(|| Error::Missing {
+        what: "lockstep results".into(),
+        dir: dir.to_path_buf(),
+    })
 }
 
 /// The case of the lockstep from the compacted state: one servo step, then `steps` steps at the
@@ -347,7 +223,7 @@ fn cached_lockstep(case: &ShearCase, dir: &Path, steps: u64) -> Option<(Horizon,
 }
 
 /// Per-seed outcome.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SeedResult {
     pub seed: u64,
     pub horizon: Option<Horizon>,
@@ -365,12 +241,14 @@ pub struct SeedResult {
     pub native_particle_steps_per_s: Option<f64>,
 }
 
-/// `summary.json` of `verify shear`.
-#[derive(Clone, Debug, Serialize)]
+/// The outcome of a shear study; `summary.json` of `verify shear`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ShearSummary {
+    /// [`super::SCHEMA`].
+    pub schema: u32,
     pub pass: bool,
-    pub preset: String,
-    pub rolling: String,
+    pub preset: Preset,
+    pub rolling: RollingModel,
     pub mu_r: f64,
     pub eta_r: f64,
     pub particles: usize,
@@ -387,24 +265,61 @@ pub struct ShearSummary {
     pub paired_dmu: Option<crate::compare::Paired>,
     pub liggghts_version: String,
     pub date_utc: String,
+    /// Every seed's series per code, in seed order (in memory only: the CSVs hold them).
+    #[serde(skip)]
+    pub series: CodeSeries,
 }
 
-/// `verify shear`: runs, prints, writes `summary.json`; the outcome of its comparisons.
-pub fn shear(a: ShearArgs) -> Result<Outcome> {
-    let summary = shear_run(&a)?;
-    Ok(if summary.pass || summary.results.is_empty() {
-        Outcome::Agree
-    } else {
-        Outcome::Disagree
-    })
+/// Per-code series of the seeds of a study (empty for a code that did not run).
+#[derive(Clone, Debug, Default)]
+pub struct CodeSeries {
+    pub liggghts: Vec<Series>,
+    pub native: Vec<Series>,
+}
+
+impl ShearSummary {
+    /// The verdict of the study: a study that compared nothing (one code only) is not a
+    /// disagreement.
+    pub fn verdict(&self) -> Verdict {
+        Verdict::from_pass(self.pass || self.results.is_empty())
+    }
+}
+
+impl super::Versioned for ShearSummary {
+    fn schema(&self) -> u32 {
+        self.schema
+    }
 }
 
 /// Runs every seed of a shear case in the codes asked for (reusing stored per-seed results),
 /// compares them, writes plots and `summary.json` into the output directory, and returns the
 /// summary.
-pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
+pub fn run(a: &ShearRequest) -> Result<ShearSummary> {
+    if a.seeds == 0 || a.seeds > 1000 {
+        return Err(Error::invalid("--seeds", a.seeds, "1 ..= 1000"));
+    }
+    if a.case.seed == 0 || a.case.seed > u64::MAX / 2 {
+        return Err(Error::invalid("--first-seed", a.case.seed, ">= 1"));
+    }
+    let cases: Vec<(ShearCase, Vec<String>)> = a
+        .seed_range()
+        .map(|s| a.seed_case(s))
+        .collect::<Result<_>>()?;
+    run_cases(a, cases)
+}
+
+/// [`run`] with the seeds' cases already built (`a.seed_case` of each seed, in order; a sweep
+/// builds its case once to check the input hash and passes it on).
+pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Result<ShearSummary> {
+    if cases.len() as u64 != a.seeds || cases.is_empty() {
+        return Err(Error::invalid(
+            "cases",
+            cases.len(),
+            format!("one case per seed ({})", a.seeds),
+        ));
+    }
     // a caller with a display of its own (a sweep) gets warnings only
-    let quiet = a.hide_progress;
+    let quiet = a.quiet;
     macro_rules! say {
         ($($t:tt)*) => {
             if !quiet {
@@ -422,29 +337,15 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             "a number in (0, 1)",
         ));
     }
-    if a.seeds == 0 || a.seeds > 1000 {
-        return Err(Error::invalid("--seeds", a.seeds, "1 ..= 1000"));
-    }
-    if a.first_seed == 0 || a.first_seed > u64::MAX / 2 {
-        return Err(Error::invalid("--first-seed", a.first_seed, ">= 1"));
-    }
-    let cases: Vec<(ShearCase, Vec<String>)> = (a.first_seed..a.first_seed + a.seeds)
-        .map(|s| shear_case(a, s))
-        .collect::<Result<_>>()?;
     let case0 = &cases[0].0;
-    let run_lig = !a.native_only;
-    let run_nat = !a.liggghts_only;
+    let run_lig = a.engine.runs_liggghts();
+    let run_nat = a.engine.runs_native();
     let lig = if run_lig {
-        Some(Liggghts::locate(
-            a.liggghts.as_deref(),
-            Duration::from_secs(a.timeout),
-        )?)
+        Some(a.liggghts.locate()?)
     } else {
         None
     };
-    let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("runs").join(format!("shear-{}-{}", a.preset, utc_stamp()))
-    });
+    let out = a.out.clone();
     let cores = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1);
@@ -459,11 +360,11 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         .collect();
     say!(
         "verify shear: preset {}, {} particles, rolling {} (mu_r {}, eta_r {}), {} seed(s), dt {:e} s, {} steps per seed",
-        a.preset,
+        a.case.preset,
         case0.particles,
         case0.models.rolling,
-        a.mu_r,
-        a.eta_r,
+        a.case.mu_r,
+        a.case.eta_r,
         a.seeds,
         case0.dt,
         case0.total_steps()
@@ -527,7 +428,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
                     Some(sc.spawn(move || Ok(c)))
                 }
                 (Some(l), _) => {
-                    let p = if a.hide_progress {
+                    let p = if quiet {
                         Progress::hidden()
                     } else {
                         Progress::new(&multi, &format!("LIGGGHTS s{}", case.seed), total, case.dt)
@@ -544,7 +445,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
                         Ok(c)
                     }
                     None => {
-                        let p = if a.hide_progress {
+                        let p = if quiet {
                             Progress::hidden()
                         } else {
                             Progress::new(&multi, &format!("native s{}", case.seed), total, case.dt)
@@ -613,7 +514,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
     let ls = (!lig_series.is_empty()).then(|| steady(&lig_series, window, area));
     let ns = (!nat_series.is_empty()).then(|| steady(&nat_series, window, area));
     let mut results = Vec::new();
-    let label = format!("shear_{}", a.preset);
+    let label = format!("shear_{}", a.case.preset);
     let model = case0.models.rolling.keyword().to_string();
     let target = case0.normal_stress;
     for (code, st) in [("liggghts", &ls), ("native", &ns)] {
@@ -638,7 +539,7 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
     }
     if let (Some(l), Some(n)) = (&ls, &ns) {
         let dmu = (l.mu - n.mu).abs();
-        let overlap = dmu <= l.mu_ci95 + n.mu_ci95;
+        let overlap = within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95);
         results.push(crate::compare::ChannelResult {
             case: label.clone(),
             model: model.clone(),
@@ -652,13 +553,14 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             pass: dmu <= a.mu_atol && overlap,
         });
     }
-    plots(&out, &lig_series, &nat_series)?;
+    crate::report::shear::plots(&out, &lig_series, &nat_series)?;
     let summary = ShearSummary {
+        schema: super::SCHEMA,
         pass: results.iter().all(|r| r.pass) && !results.is_empty(),
-        preset: a.preset.clone(),
-        rolling: model,
-        mu_r: a.mu_r,
-        eta_r: a.eta_r,
+        preset: a.case.preset,
+        rolling: case0.models.rolling,
+        mu_r: a.case.mu_r,
+        eta_r: a.case.eta_r,
         particles: case0.particles,
         dt: case0.dt,
         inertial_numbers: inertial,
@@ -678,11 +580,27 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
             .map(|l| l.version())
             .unwrap_or_else(|| "not run".into()),
         date_utc: utc_stamp(),
+        series: CodeSeries {
+            liggghts: lig_series,
+            native: nat_series,
+        },
     };
     write_atomic(
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    Ok(summary)
+}
+
+/// Prints a study's steady figures, paired differences and verdicts.
+pub fn print_summary(summary: &ShearSummary, out: &Path) {
+    let (ls, ns) = (&summary.liggghts, &summary.native);
+    let window = summary.steady_window_steps;
+    macro_rules! say {
+        ($($t:tt)*) => {
+            println!($($t)*)
+        };
+    }
     say!();
     say!(
         "steady window: steps {}..{} (second half of the last stage)",
@@ -742,7 +660,6 @@ pub fn shear_run(a: &ShearArgs) -> Result<ShearSummary> {
         out.join("mu_strain.svg").display(),
         out.join("summary.json").display()
     );
-    Ok(summary)
 }
 
 fn print_seed(s: &SeedResult) {
@@ -795,109 +712,4 @@ fn print_seed(s: &SeedResult) {
             }
         }
     }
-}
-
-/// Points per curve in the shear plots.
-const PLOT_POINTS: usize = 1500;
-
-fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
-    let xy = |s: &Series, x: &str, y: &str| -> Vec<(f64, f64)> {
-        let (cx, cy) = (s.col(x).expect("column"), s.col(y).expect("column"));
-        s.rows.iter().map(|r| (r[cx], r[cy])).collect()
-    };
-    let mut data = Vec::new();
-    for (k, s) in lig.iter().enumerate() {
-        data.push((k, 0usize, s));
-    }
-    for (k, s) in nat.iter().enumerate() {
-        data.push((k, 1usize, s));
-    }
-    for (file, title, x, xd, y, yd) in [
-        (
-            "mu_strain.svg",
-            "friction coefficient mu = Fx / Fy on the top plate",
-            "strain[-]",
-            "shear strain",
-            "mu[-]",
-            "mu",
-        ),
-        (
-            "top_force.svg",
-            "normal force on the top plate",
-            "time[s]",
-            "time [s]",
-            "top_f_y[N]",
-            "Fy [N]",
-        ),
-        (
-            "shear_force.svg",
-            "shear force on the top plate",
-            "strain[-]",
-            "shear strain",
-            "top_f_x[N]",
-            "Fx [N]",
-        ),
-        (
-            "mobilised.svg",
-            "rolling contacts at full mobilisation (native; not in LIGGGHTS' output)",
-            "strain[-]",
-            "shear strain",
-            "mobilised[-]",
-            "fraction of touching pairs",
-        ),
-        (
-            "height.svg",
-            "sample height",
-            "time[s]",
-            "time [s]",
-            "height[m]",
-            "height [m]",
-        ),
-        (
-            "kinetic_energy.svg",
-            "rotational kinetic energy",
-            "time[s]",
-            "time [s]",
-            "erot[J]",
-            "E_rot [J]",
-        ),
-    ] {
-        let pts: Vec<CurveData> = data
-            .iter()
-            .map(|(l, c, s)| {
-                let mut p = xy(s, x, y);
-                if x == "strain[-]" {
-                    p.retain(|q| q.0 > 0.0);
-                }
-                (l.to_string(), *c, p)
-            })
-            .collect();
-        // raw data faint, a running mean (+-10 outputs) per seed on top, one legend entry per code
-        // (decimated to keep the SVGs light: the nightly report inlines them)
-        let means: Vec<Vec<(f64, f64)>> = pts
-            .iter()
-            .map(|(_, _, p)| decimate(&running_mean(p, 10), PLOT_POINTS))
-            .collect();
-        let pts: Vec<CurveData> = pts
-            .into_iter()
-            .map(|(l, c, p)| (l, c, decimate(&p, PLOT_POINTS)))
-            .collect();
-        let mut cs: Vec<Curve> = pts
-            .iter()
-            .map(|(_, c, p)| Curve::new("", p, *c).faint())
-            .collect();
-        for ((seed, c, _), m) in pts.iter().zip(&means) {
-            let label = if seed == "0" {
-                format!(
-                    "{} (running mean, each seed)",
-                    if *c == 0 { "LIGGGHTS" } else { "native" }
-                )
-            } else {
-                String::new()
-            };
-            cs.push(Curve::new(&label, m, *c));
-        }
-        line_plot(&out.join(file), title, xd, yd, &cs)?;
-    }
-    Ok(())
 }

@@ -2,51 +2,37 @@
 //! smaller time steps (same strain), to tell physics from time-step artefacts such as the
 //! unstable explicit rolling dashpot (see [`crate::spec::stability_shear`]).
 
-use crate::cli::{utc_stamp, Outcome};
-use crate::cli_shear::{shear_case, ShearArgs};
-use crate::compare::{block_ci95, mean_ci95, steady, steady_window, Steady};
+pub use super::convergence_outcome::*;
+use super::shear::ShearRequest;
+use super::sweep::run_input_hash;
+use super::utc_stamp;
+use crate::compare::{block_ci95, mean_ci95, steady, steady_window, window_figures, within_cis};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
-use crate::report::plot::{line_plot, Curve};
 use crate::report::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_ends, run_liggghts, run_native, write_series};
 use crate::solver::shear::compact;
-use crate::spec::stability_shear::{stability, StabilityReport};
+use crate::spec::shear::ShearCase;
+use crate::spec::stability_shear::stability;
 use crate::spec::RollingModel;
-use crate::sweep::run_input_hash;
-use clap::Args;
-use serde::Serialize;
-use std::path::{Path, PathBuf};
-use std::time::Duration;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
 
-#[derive(Args, Debug, Clone)]
-pub struct ConvergenceArgs {
-    /// The shear case: every `verify shear` option (preset, mu_r, eta_r, rolling, seeds, ...).
-    #[command(flatten)]
-    pub case: ShearArgs,
-    /// Factors applied to the preset's dt, largest first.
-    #[arg(long, value_delimiter = ',', default_value = "1,0.5,0.25")]
+/// A convergence study: the shear request's case (its engine, seeds, output directory) at each
+/// dt factor, from one compacted state per seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConvergenceRequest {
+    /// The case; its protocol's dt factor must be 1 (the study's factors are `dt_factors`).
+    pub shear: ShearRequest,
+    /// Factors applied to the preset's dt.
     pub dt_factors: Vec<f64>,
-    /// native, liggghts or both.
-    #[arg(long, default_value = "native")]
-    pub engine: String,
-    /// The dt factors at which LIGGGHTS runs (with --engine liggghts|both); a subset of
-    /// --dt-factors. Default: all of them. LIGGGHTS at the smallest dt is the costliest run.
-    #[arg(long, value_delimiter = ',')]
+    /// The dt factors at which LIGGGHTS runs (a subset of `dt_factors`; None: all).
     pub liggghts_dt_factors: Option<Vec<f64>>,
-    /// Also run the native stable-dashpot model (`epsd_implicit`) at the largest dt factor,
-    /// from the same compacted state: does it give at that dt what epsd gives converged?
-    /// Only with --rolling epsd.
-    #[arg(long)]
+    /// Also run `epsd_implicit` at the largest dt factor (with epsd only).
     pub with_implicit: bool,
 }
-
-/// The codes a convergence study can run: LIGGGHTS, the native solver with the case's rolling
-/// model, and the native solver with the stable-dashpot model `epsd_implicit`.
-const CODES: [&str; 3] = ["native", "liggghts", "implicit"];
 
 /// The stored series of a run if it is current (its `.hash` file matches).
 fn stored_series(dir: &Path, code: &str, hash: &str) -> Option<Series> {
@@ -57,57 +43,18 @@ fn stored_series(dir: &Path, code: &str, hash: &str) -> Option<Series> {
     Series::read_csv(&dir.join(format!("{code}.csv"))).ok()
 }
 
-/// Figures of one (dt, code).
-#[derive(Clone, Debug, Serialize)]
-pub struct DtPoint {
-    pub code: String,
-    pub dt_factor: f64,
-    pub dt: f64,
-    pub steady: Steady,
-    /// Mean rotational kinetic energy in the steady window, over seeds [J], with 95 % CI
-    /// (over seeds; with one seed from 10 block means of the window).
-    pub erot: f64,
-    pub erot_ci95: f64,
-    pub stability: StabilityReport,
+/// The time step of `case` scaled by a study's factor, from the compacted state: one servo step
+/// of compression, no snapshots ([`ShearCase::scale_dt`] is the scaling rule).
+fn at_factor(case: &ShearCase, f: f64) -> Result<ShearCase> {
+    let mut c = case.clone().scale_dt("--dt-factors", f)?;
+    c.compression_steps = 1;
+    c.snapshot_every = 0;
+    Ok(c)
 }
 
-/// The convergence verdict of one code.
-#[derive(Clone, Debug, Serialize)]
-pub struct CodeVerdict {
-    pub code: String,
-    pub finest_factor: f64,
-    /// Its two smallest dt agree within their CIs.
-    pub converged: bool,
-    /// Largest factor from which every step to the next smaller dt agrees (when converged).
-    pub largest_converged_factor: Option<f64>,
-}
-
-#[derive(Clone, Debug, Serialize)]
-pub struct ConvergenceSummary {
-    /// The case studied (what `verify sweep report --converged` matches points by).
-    pub preset: String,
-    pub rolling: String,
-    pub mu_r: f64,
-    pub eta_r: f64,
-    /// Index and speed [m/s] of the stage whose steady window is measured (the last one).
-    pub stage: usize,
-    pub speed: f64,
-    pub converged: bool,
-    /// Largest dt factor from which every step to the next smaller dt agrees within the CIs
-    /// (over codes: the smallest such factor).
-    pub largest_converged_factor: Option<f64>,
-    pub points: Vec<DtPoint>,
-    /// Per code: its finest dt factor, converged there or not, its largest converged factor.
-    pub per_code: Vec<CodeVerdict>,
-    /// Per dt factor where both codes ran: their steady mu agree within the CIs.
-    pub codes_agree: Vec<(f64, bool)>,
-    /// With --with-implicit: whether epsd_implicit at the largest dt agrees (within the CIs)
-    /// with the native epsd result at the smallest dt.
-    pub implicit_matches_finest: Option<bool>,
-    pub date_utc: String,
-}
-
-pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
+/// Runs the study (reusing every stored current run), prints its table, writes plots and
+/// `summary.json`.
+pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     if a.dt_factors.is_empty()
         || a.dt_factors
             .iter()
@@ -119,17 +66,18 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             "factors in (0, 1], e.g. 1,0.5,0.25",
         ));
     }
-    if a.case.native_only || a.case.liggghts_only {
+    let sh = &a.shear;
+    if sh.case.protocol.dt_factor != 1.0 {
         return Err(Error::invalid(
-            "--native-only/--liggghts-only",
-            "given",
-            "--engine native|liggghts|both for verify convergence",
+            "--dt-factor",
+            sh.case.protocol.dt_factor,
+            "1 with verify convergence: its time steps are --dt-factors (the two would multiply)",
         ));
     }
-    if a.with_implicit && a.case.rolling != "epsd" {
+    if a.with_implicit && sh.case.rolling != RollingModel::Epsd {
         return Err(Error::invalid(
             "--with-implicit",
-            &a.case.rolling,
+            sh.case.rolling,
             "--rolling epsd (epsd_implicit is the stable-dashpot variant of epsd)",
         ));
     }
@@ -142,41 +90,20 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             ));
         }
     }
-    let (run_nat, run_lig) = match a.engine.as_str() {
-        "native" => (true, false),
-        "liggghts" => (false, true),
-        "both" => (true, true),
-        e => {
-            return Err(Error::Unknown {
-                what: "engine",
-                name: e.into(),
-                valid: "native, liggghts, both".into(),
-            })
-        }
-    };
+    let (run_nat, run_lig) = (sh.engine.runs_native(), sh.engine.runs_liggghts());
     let lig = if run_lig {
-        Some(Liggghts::locate(
-            a.case.liggghts.as_deref(),
-            Duration::from_secs(7 * 24 * 3600),
-        )?)
+        Some(sh.liggghts.locate()?)
     } else {
         None
     };
-    let out = a
-        .case
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("runs").join(format!("convergence-{}", utc_stamp())));
-    let mut sargs = a.case.clone();
-    sargs.native_only = !run_lig;
-    sargs.liggghts_only = !run_nat;
+    let out = sh.out.clone();
     let mut factors = a.dt_factors.clone();
     factors.sort_by(|x, y| y.total_cmp(x));
     println!(
         "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
-        a.case.preset,
-        a.engine,
-        a.case.seeds,
+        sh.case.preset,
+        format!("{:?}", sh.engine).to_lowercase(),
+        sh.seeds,
         out.display()
     );
     let lig_factors = a
@@ -185,34 +112,30 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         .unwrap_or_else(|| factors.clone());
     // per seed: the compacted state at the preset's dt (native), shared by every dt and code;
     // a run whose current series is stored (same input hash) is not run again
-    let mut per: Vec<(String, f64, Vec<Series>)> = Vec::new();
-    for seed in 1..=a.case.seeds {
-        let (case, _) = shear_case(&sargs, seed)?;
+    let mut per: Vec<(StudyCode, f64, Vec<Series>)> = Vec::new();
+    for seed in 1..=sh.seeds {
+        let (case, _) = sh.seed_case(seed)?;
         let loose = loose_packing(&case);
         let mut state = None;
         for &f in &factors {
-            let mut c = case.clone();
-            c.dt = case.dt * f;
-            c.compression_steps = 1;
-            c.output_every = ((case.output_every as f64 / f).round() as u64).max(1);
-            c.snapshot_every = 0;
+            let c = at_factor(&case, f)?;
             let dir = out.join(format!("dt{f}")).join(format!("seed{seed}"));
             std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-            for code in CODES {
+            for code in StudyCode::ALL {
                 let on = match code {
-                    "native" => run_nat,
-                    "liggghts" => run_lig && lig_factors.contains(&f),
-                    _ => a.with_implicit && f == factors[0],
+                    StudyCode::Native => run_nat,
+                    StudyCode::Liggghts => run_lig && lig_factors.contains(&f),
+                    StudyCode::Implicit => a.with_implicit && f == factors[0],
                 };
                 if !on {
                     continue;
                 }
                 let mut cc = c.clone();
-                if code == "implicit" {
+                if code == StudyCode::Implicit {
                     cc.models.rolling = RollingModel::EpsdImplicit;
                 }
-                let hash = run_input_hash(&cc, code)?;
-                let s = match stored_series(&dir, code, &hash) {
+                let hash = run_input_hash(&cc, code.keyword())?;
+                let s = match stored_series(&dir, code.keyword(), &hash) {
                     Some(s) => {
                         println!("  seed {seed}, dt factor {f}, {code}: current result kept");
                         s
@@ -227,7 +150,7 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
                             cc.dt,
                             cc.total_steps()
                         );
-                        let run = if code == "liggghts" {
+                        let run = if code == StudyCode::Liggghts {
                             run_liggghts(
                                 &cc,
                                 state,
@@ -245,23 +168,22 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
                 };
                 match per.iter_mut().find(|p| p.0 == code && p.1 == f) {
                     Some(p) => p.2.push(s),
-                    None => per.push((code.to_string(), f, vec![s])),
+                    None => per.push((code, f, vec![s])),
                 }
             }
         }
     }
-    let (case0, _) = shear_case(&sargs, 1)?;
+    let (case0, _) = sh.seed_case(1)?;
     let mut points = Vec::new();
     for (code, f, series) in &per {
-        let mut c = case0.clone();
-        c.dt = case0.dt * f;
-        c.compression_steps = 1;
+        let mut c = at_factor(&case0, *f)?;
         let ends = run_ends(&c);
         let window = steady_window(ends[ends.len() - 2], ends[ends.len() - 1]);
         let st = steady(series, window, c.box_x * c.box_z);
+        let area = c.box_x * c.box_z;
         let erots: Vec<f64> = series
             .iter()
-            .map(|s| s.window_mean("erot[J]", window))
+            .map(|s| window_figures(s, window, area).erot)
             .collect();
         let (erot, erot_ci95) = if series.len() == 1 {
             (
@@ -275,11 +197,11 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         } else {
             mean_ci95(&erots)
         };
-        if code == "implicit" {
+        if *code == StudyCode::Implicit {
             c.models.rolling = RollingModel::EpsdImplicit;
         }
         points.push(DtPoint {
-            code: code.clone(),
+            code: *code,
             dt_factor: *f,
             dt: c.dt,
             steady: st,
@@ -292,11 +214,11 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
     // study's verdict comes from the codes that ran down to the smallest factor (LIGGGHTS
     // limited by --liggghts-dt-factors is judged, and reported, but does not decide it)
     let agree = |x: &DtPoint, y: &DtPoint| {
-        (x.steady.mu - y.steady.mu).abs() <= x.steady.mu_ci95 + y.steady.mu_ci95
+        within_cis(x.steady.mu, x.steady.mu_ci95, y.steady.mu, y.steady.mu_ci95)
     };
     let finest_factor = factors[factors.len() - 1];
     let mut per_code = Vec::new();
-    for code in ["native", "liggghts"] {
+    for code in [StudyCode::Native, StudyCode::Liggghts] {
         let pts: Vec<&DtPoint> = points.iter().filter(|p| p.code == code).collect();
         let Some(finest) = pts.last() else {
             continue;
@@ -312,7 +234,7 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             }
         }
         per_code.push(CodeVerdict {
-            code: code.into(),
+            code,
             finest_factor: finest.dt_factor,
             converged,
             largest_converged_factor: converged.then_some(lc),
@@ -337,18 +259,21 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         .filter_map(|f| {
             let n = points
                 .iter()
-                .find(|p| p.code == "native" && p.dt_factor == *f)?;
+                .find(|p| p.code == StudyCode::Native && p.dt_factor == *f)?;
             let l = points
                 .iter()
-                .find(|p| p.code == "liggghts" && p.dt_factor == *f)?;
+                .find(|p| p.code == StudyCode::Liggghts && p.dt_factor == *f)?;
             Some((*f, agree(n, l)))
         })
         .collect();
     // the stable-dashpot model at the largest dt against native epsd at the smallest
-    let implicit_matches_finest = points.iter().find(|p| p.code == "implicit").and_then(|im| {
-        let finest = points.iter().rfind(|p| p.code == "native")?;
-        Some(agree(im, finest))
-    });
+    let implicit_matches_finest = points
+        .iter()
+        .find(|p| p.code == StudyCode::Implicit)
+        .and_then(|im| {
+            let finest = points.iter().rfind(|p| p.code == StudyCode::Native)?;
+            Some(agree(im, finest))
+        });
     println!(
         "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",
         "code", "dt factor", "dt [s]", "steady mu (95 % CI)", "E_rot [J] (95 % CI)", "S max"
@@ -408,10 +333,11 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
             factors[factors.len() - 1]
         );
     }
-    plots(&out, &points)?;
+    crate::report::convergence::plots(&out, &points)?;
     let summary = ConvergenceSummary {
-        preset: a.case.preset.clone(),
-        rolling: a.case.rolling.clone(),
+        schema: super::SCHEMA,
+        preset: sh.case.preset,
+        rolling: sh.case.rolling,
         mu_r: case0.material.rolling_friction,
         eta_r: case0.material.rolling_damping,
         stage: case0.stages.len() - 1,
@@ -433,66 +359,5 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Outcome> {
         out.join("mu_dt.svg").display(),
         out.join("summary.json").display()
     );
-    Ok(if converged {
-        Outcome::Agree
-    } else {
-        Outcome::Disagree
-    })
-}
-
-/// One code's curve: label, colour, points, CI half-widths.
-type ErrSet = (String, usize, Vec<(f64, f64)>, Vec<f64>);
-
-fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
-    type Get = fn(&DtPoint) -> f64;
-    for (file, title, ylab, get, err) in [
-        (
-            "mu_dt.svg",
-            "steady friction coefficient against time step (95 % CI bars)",
-            "mu",
-            (|p: &DtPoint| p.steady.mu) as Get,
-            (|p: &DtPoint| p.steady.mu_ci95) as Get,
-        ),
-        (
-            "erot_dt.svg",
-            "mean rotational kinetic energy against time step (log scale)",
-            "log10 E_rot [J]",
-            |p: &DtPoint| p.erot.max(1e-300).log10(),
-            |_: &DtPoint| 0.0,
-        ),
-    ] {
-        let sets: Vec<ErrSet> = ["liggghts", "native", "implicit"]
-            .iter()
-            .enumerate()
-            .map(|(k, code)| {
-                let sel: Vec<&DtPoint> = points.iter().filter(|p| p.code == *code).collect();
-                (
-                    if *code == "implicit" {
-                        "native epsd_implicit".to_string()
-                    } else {
-                        code.to_string()
-                    },
-                    k,
-                    sel.iter().map(|p| (p.dt, get(p))).collect::<Vec<_>>(),
-                    sel.iter()
-                        .map(|p| {
-                            let e = err(p);
-                            if e.is_finite() {
-                                e
-                            } else {
-                                0.0
-                            }
-                        })
-                        .collect(),
-                )
-            })
-            .filter(|d| !d.2.is_empty())
-            .collect();
-        let cs: Vec<Curve> = sets
-            .iter()
-            .map(|(label, k, pts, e)| Curve::new(label, pts, *k).with_err(e))
-            .collect();
-        line_plot(&out.join(file), title, "dt [s]", ylab, &cs)?;
-    }
-    Ok(())
+    Ok(summary)
 }

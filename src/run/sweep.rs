@@ -6,54 +6,26 @@
 //! run again. The hash covers the full shear case of the seed (materials, box, protocol, dt,
 //! rolling model and coefficients), the engine and the crate version, as FNV-1a 64 of its JSON.
 
-use crate::cli_shear::{shear_case, shear_run, Protocol, ShearArgs};
-use crate::compare::steady_window;
+use super::shear::{ShearRequest, ShearSummary};
+pub use super::Engine;
+use crate::compare::{steady_window, window_figures};
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
 use crate::series::Series;
 use crate::shear::run_ends;
-use crate::spec::shear::ShearCase;
+use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::stability_shear::stability;
+use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// Which codes a sweep runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Engine {
-    Native,
-    Liggghts,
-    Both,
-}
-
-impl Engine {
-    pub fn parse(s: &str) -> Result<Self> {
-        match s {
-            "native" => Ok(Engine::Native),
-            "liggghts" => Ok(Engine::Liggghts),
-            "both" => Ok(Engine::Both),
-            _ => Err(Error::Unknown {
-                what: "engine",
-                name: s.into(),
-                valid: "native, liggghts, both".into(),
-            }),
-        }
-    }
-    /// CPU cores one run occupies (both codes run side by side).
-    pub fn cores(self) -> usize {
-        if self == Engine::Both {
-            2
-        } else {
-            1
-        }
-    }
-}
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// What every run of a sweep shares.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SweepBase {
-    pub preset: String,
-    pub rolling: String,
+    pub preset: Preset,
+    pub rolling: RollingModel,
     pub engine: Engine,
     /// Speeds, strain per stage, dt factor (flattened: the manifest keeps them at top level).
     #[serde(flatten)]
@@ -156,9 +128,10 @@ impl Manifest {
 
     pub fn load(path: &Path) -> Result<Self> {
         let m: Manifest =
-            serde_json::from_str(&read_to_string(path)?).map_err(|e| Error::Parse {
+            serde_json::from_str(&read_to_string(path)?).map_err(|source| Error::JsonFile {
                 path: path.to_path_buf(),
-                msg: e.to_string(),
+                line: None,
+                source,
             })?;
         if m.schema != 1 {
             return Err(Error::invalid("manifest schema", m.schema, "1"));
@@ -181,28 +154,26 @@ impl Manifest {
     }
 }
 
-/// The `verify shear` arguments of one run (one seed).
-pub fn shear_args(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) -> ShearArgs {
-    ShearArgs {
+/// The shear request of one run (one seed).
+pub fn shear_request(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) -> ShearRequest {
+    let case = CaseRequest {
+        preset: base.preset,
+        rolling: base.rolling,
         mu_r: r.mu_r,
         eta_r: r.eta_r,
-        rolling: base.rolling.clone(),
-        preset: base.preset.clone(),
-        seeds: 1,
-        first_seed: r.seed,
+        seed: r.seed,
         protocol: base.protocol.clone(),
-        threads: Some(threads),
-        out: Some(dir.to_path_buf()),
-        native_only: base.engine == Engine::Native,
-        liggghts_only: base.engine == Engine::Liggghts,
-        hide_progress: true,
-        ..ShearArgs::defaults()
-    }
+        overrides: Overrides::default(),
+        allow_inertial: false,
+    };
+    let mut q = ShearRequest::new(case, 1, base.engine, dir.to_path_buf());
+    q.threads = Some(threads);
+    q.quiet = true;
+    q
 }
 
 fn input_hash(base: &SweepBase, r: &RunSpec) -> Result<String> {
-    let args = shear_args(base, r, Path::new("."), 1);
-    let (case, _) = shear_case(&args, r.seed)?;
+    let (case, _) = shear_request(base, r, Path::new("."), 1).seed_case(r.seed)?;
     case_hash(&case, base.engine)
 }
 
@@ -228,8 +199,11 @@ pub fn run_input_hash(case: &ShearCase, tag: &str) -> Result<String> {
 pub struct CodeStage {
     /// Mean mu, normal stress [Pa] and rotational kinetic energy [J] over the stage's steady
     /// window (its second half).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mu: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub normal_stress: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub erot: f64,
     /// Fraction of touching pairs at full rolling mobilisation (native; NaN for LIGGGHTS).
     #[serde(default)]
@@ -285,8 +259,8 @@ pub fn run_one(
         return Ok((res, false));
     }
     let dir = run_dir(sweep, r);
-    let args = shear_args(&m.base, r, &dir, threads);
-    let (case, _) = shear_case(&args, r.seed)?;
+    let req = shear_request(&m.base, r, &dir, threads);
+    let (case, warnings) = req.seed_case(r.seed)?;
     if case_hash(&case, m.base.engine)? != r.input_hash {
         return Err(Error::invalid(
             "manifest",
@@ -295,26 +269,23 @@ pub fn run_one(
              plan the sweep again)",
         ));
     }
-    let summary = shear_run(&args)?;
+    let summary: ShearSummary = super::shear::run_cases(&req, vec![(case.clone(), warnings)])?;
     let ends = run_ends(&case);
-    let series = |code: &str| -> Result<Option<Series>> {
-        let p = dir
-            .join(format!("seed{}", r.seed))
-            .join(format!("{code}.csv"));
-        if p.is_file() {
-            Ok(Some(Series::read_csv(&p)?))
-        } else {
-            Ok(None)
-        }
-    };
-    let (ls, ns) = (series("liggghts")?, series("native")?);
+    // the study's series in memory (one seed; none for a code that did not run)
+    let (ls, ns): (Option<Series>, Option<Series>) = (
+        summary.series.liggghts.first().cloned(),
+        summary.series.native.first().cloned(),
+    );
     let area = case.box_x * case.box_z;
     let stage = |s: &Option<Series>, w: (u64, u64)| {
-        s.as_ref().map(|s| CodeStage {
-            mu: s.window_mean("mu[-]", w),
-            normal_stress: s.window_mean("top_f_y[N]", w) / area,
-            erot: s.window_mean("erot[J]", w),
-            mobilised: Some(s.window_mean("mobilised[-]", w)).filter(|m| m.is_finite()),
+        s.as_ref().map(|s| {
+            let f = window_figures(s, w, area);
+            CodeStage {
+                mu: f.mu,
+                normal_stress: f.normal_stress,
+                erot: f.erot,
+                mobilised: Some(f.mobilised).filter(|m| m.is_finite()),
+            }
         })
     };
     let stages = case
@@ -341,7 +312,7 @@ pub fn run_one(
         stages,
         liggghts_wall_s: seed.and_then(|s| s.liggghts_wall_s),
         native_wall_s: seed.and_then(|s| s.native_wall_s),
-        date_utc: crate::cli::utc_stamp(),
+        date_utc: super::utc_stamp(),
     };
     write_atomic(
         &dir.join("result.json"),
@@ -394,14 +365,223 @@ pub fn results_csv(results: &[RunResult]) -> String {
     s
 }
 
+/// Collects DIR's results, writes results.json/.csv; errors naming the runs without a result.
+pub fn collect_dir(dir: &Path) -> Result<(Vec<RunResult>, usize)> {
+    let m = Manifest::load(&dir.join("manifest.json"))?;
+    let (results, missing) = collect(&m, dir);
+    write_atomic(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(&results)?.as_bytes(),
+    )?;
+    write_atomic(&dir.join("results.csv"), results_csv(&results).as_bytes())?;
+    if !missing.is_empty() {
+        return Err(Error::Cases(format!(
+            "{} of {} runs have no current result (indices {}); run them with `verify sweep \
+             run-one --manifest {} --index I`, resubmit the array, or rerun the sweep command \
+             (it resumes)",
+            missing.len(),
+            m.runs.len(),
+            missing
+                .iter()
+                .map(|r| r.index.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+            dir.join("manifest.json").display()
+        )));
+    }
+    Ok((results, m.runs.len()))
+}
+
+/// A path that can go into a shell script between single quotes.
+fn shell_path(p: &Path) -> Result<String> {
+    let s = p.display().to_string();
+    if s.contains(|c: char| c == '\'' || c == '"' || c.is_whitespace()) {
+        return Err(Error::invalid(
+            "path",
+            &s,
+            "a path without quotes or white space (it goes into a job script)",
+        ));
+    }
+    Ok(format!("'{s}'"))
+}
+
+/// The SLURM job-array script of a manifest.
+pub fn slurm_script(m: &Manifest, dir: &Path, verify: &Path) -> Result<String> {
+    let cores = m.base.engine.cores();
+    let dir = std::path::absolute(dir).map_err(|e| Error::io(dir, e))?;
+    Ok(format!(
+        "#!/bin/bash\n\
+         # DEM sweep: {n} runs ({preset} preset, {rolling}, engine {engine:?}), one array task each.\n\
+         # Submit: sbatch {script}; then: verify sweep collect {d}; verify sweep report {d}\n\
+         #SBATCH --job-name=dem-sweep\n\
+         #SBATCH --array=0-{last}\n\
+         #SBATCH --ntasks=1\n\
+         #SBATCH --cpus-per-task={cores}\n\
+         #SBATCH --output={logs}/run-%a.log\n\
+         set -euo pipefail\n\
+         exec {verify} sweep run-one --manifest {manifest} --index \"$SLURM_ARRAY_TASK_ID\" --threads 1\n",
+        n = m.runs.len(),
+        preset = m.base.preset,
+        rolling = m.base.rolling,
+        engine = m.base.engine,
+        script = dir.join("sweep.sbatch").display(),
+        d = dir.display(),
+        last = m.runs.len() - 1,
+        logs = shell_path(&dir.join("logs"))?.trim_matches('\''),
+        verify = shell_path(verify)?,
+        manifest = shell_path(&dir.join("manifest.json"))?,
+    ))
+}
+
+/// A sweep: the manifest of `base` over mu_r x eta_r x seeds in `out`, run `jobs` at a time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepRequest {
+    pub base: SweepBase,
+    pub mu_r: Vec<f64>,
+    pub eta_r: Vec<f64>,
+    pub seeds: u64,
+    pub out: PathBuf,
+    /// Runs at a time (each uses one core per code).
+    pub jobs: usize,
+    /// Native solver threads per run (default: every core with one job of the native engine,
+    /// else 1).
+    pub threads: Option<usize>,
+}
+
+/// Plans the manifest of a request and stores it in `out`: a directory of the same sweep keeps
+/// its manifest (more seeds or points may be added); one of another sweep is refused.
+pub fn plan(p: &SweepRequest) -> Result<Manifest> {
+    for (flag, v) in p
+        .mu_r
+        .iter()
+        .map(|v| ("--mu-r", v))
+        .chain(p.eta_r.iter().map(|v| ("--eta-r", v)))
+    {
+        if !(v.is_finite() && *v >= 0.0) {
+            return Err(Error::invalid(flag, v, "finite numbers >= 0"));
+        }
+    }
+    if p.jobs == 0 || p.jobs > 256 {
+        return Err(Error::invalid("--jobs", p.jobs, "1 ..= 256"));
+    }
+    let out = &p.out;
+    let mut m = Manifest::plan(
+        p.base.clone(),
+        &p.mu_r,
+        &p.eta_r,
+        p.seeds,
+        super::utc_stamp(),
+    )?;
+    let mpath = out.join("manifest.json");
+    if mpath.is_file() {
+        let old = Manifest::load(&mpath)?;
+        if !m.compatible_with(&old) {
+            return Err(Error::invalid(
+                "--out",
+                out.display(),
+                "a new directory, or the directory of this sweep (it holds a different manifest: \
+                 other shared settings, or runs whose inputs changed)",
+            ));
+        }
+        if old.runs != m.runs {
+            println!(
+                "  the sweep grows from {} to {} runs (results of the common runs are kept)",
+                old.runs.len(),
+                m.runs.len()
+            );
+            m.save(&mpath)?;
+        } else {
+            m = old; // keep its creation time
+        }
+    } else {
+        m.save(&mpath)?;
+    }
+    Ok(m)
+}
+
+/// What a local sweep invocation did.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SweepOutcome {
+    /// Runs whose current result existed before.
+    pub skipped: usize,
+    pub results: Vec<RunResult>,
+    /// One message per failed run (its files and `error.txt` are kept).
+    pub failures: Vec<String>,
+    pub wall_s: f64,
+}
+
+/// Runs every run of `m` without a current result, `p.jobs` at a time; `progress` hears of
+/// each finished run (Ok) or failure (Err, with the message). Writes `last_invocation.json`.
+pub fn run_pending(
+    p: &SweepRequest,
+    m: &Manifest,
+    progress: &(dyn Fn(&RunSpec, std::result::Result<&RunResult, &str>) + Sync),
+) -> Result<SweepOutcome> {
+    let out = &p.out;
+    let t0 = std::time::Instant::now();
+    let (done, pending): (Vec<_>, Vec<_>) = m
+        .runs
+        .iter()
+        .partition(|r| current_result(out, r).is_some());
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
+    let threads = match p.threads {
+        Some(0) => return Err(Error::invalid("--threads", 0, ">= 1")),
+        Some(t) => t,
+        None if p.jobs == 1 && m.base.engine == Engine::Native => cores,
+        None => 1,
+    };
+    let next = AtomicUsize::new(0);
+    let failures: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    let results: Mutex<Vec<RunResult>> = Mutex::new(Vec::new());
+    std::thread::scope(|sc| {
+        for _ in 0..p.jobs.min(pending.len().max(1)) {
+            sc.spawn(|| loop {
+                let k = next.fetch_add(1, Ordering::SeqCst);
+                let Some(r) = pending.get(k) else { break };
+                match run_one(m, out, r.index, threads) {
+                    Ok((res, _)) => {
+                        progress(r, Ok(&res));
+                        results.lock().expect("lock").push(res);
+                    }
+                    Err(e) => {
+                        let msg = format!("run {} ({}): {e}", r.index, r.id);
+                        let _ = write_atomic(&run_dir(out, r).join("error.txt"), msg.as_bytes());
+                        progress(r, Err(&msg));
+                        failures.lock().expect("lock").push(msg);
+                    }
+                }
+            });
+        }
+    });
+    let wall = t0.elapsed().as_secs_f64();
+    write_atomic(
+        &out.join("last_invocation.json"),
+        serde_json::to_string_pretty(&serde_json::json!({
+            "date_utc": super::utc_stamp(), "wall_s": wall, "jobs": p.jobs,
+            "runs_run": pending.len(), "runs_total": m.runs.len(),
+        }))?
+        .as_bytes(),
+    )?;
+    let mut results = results.into_inner().expect("lock");
+    results.sort_by_key(|r| r.run.index);
+    Ok(SweepOutcome {
+        skipped: done.len(),
+        results,
+        failures: failures.into_inner().expect("lock"),
+        wall_s: wall,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn base() -> SweepBase {
         SweepBase {
-            preset: "ci".into(),
-            rolling: "epsd".into(),
+            preset: Preset::Ci,
+            rolling: RollingModel::Epsd,
             engine: Engine::Native,
             protocol: Protocol {
                 speeds: None,

@@ -1,15 +1,14 @@
-//! `verify replay`: flags -> [`crate::replay::ReplayRequest`] -> table, exit status. Thin: the
-//! work is in `crate::replay`.
+//! `verify replay`: flags -> [`ReplayRequest`] -> table, exit status. Thin: the work is in
+//! [`crate::run::replay`].
 
-use crate::cli::Outcome;
+use crate::cli::LiggghtsArgs;
 use crate::error::{Error, Result};
-use crate::liggghts::Liggghts;
-use crate::replay::{default_states, run, table, ReplayRequest};
-use crate::spec::shear::ShearCase;
+use crate::run::replay::{default_states, run, table, ReplayRequest, REPLAY_TIMEOUT_S};
+use crate::run::{out_or_default, Verdict};
+use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::RollingModel;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// Rolling models LIGGGHTS has (epsd_implicit is native only and cannot be replayed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -75,17 +74,13 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 20_000)]
     pub shear_span: u64,
     /// Step-1 tolerance: max |error| / channel peak.
-    #[arg(long, default_value_t = crate::replay::STEP1_RTOL)]
+    #[arg(long, default_value_t = crate::run::replay::STEP1_RTOL)]
     pub rtol: f64,
     /// Output directory (default: a new directory under ./runs/).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// LIGGGHTS binary.
-    #[arg(long)]
-    pub liggghts: Option<PathBuf>,
-    /// Timeout of the LIGGGHTS run [s].
-    #[arg(long, default_value_t = 3600)]
-    pub timeout: u64,
+    #[command(flatten)]
+    pub liggghts: LiggghtsArgs,
 }
 
 /// The request these flags describe (validated).
@@ -109,21 +104,27 @@ pub fn request(a: &ReplayArgs) -> Result<ReplayRequest> {
         return Err(Error::invalid("--states", a.states, "1 ..= 200"));
     }
     let preset = match a.preset {
-        ReplayPreset::Ci => "ci",
-        ReplayPreset::Fast => "fast",
+        ReplayPreset::Ci => Preset::Ci,
+        ReplayPreset::Fast => Preset::Fast,
     };
-    let mut case = ShearCase::preset(preset, rolling, a.mu_r, a.eta_r, a.seed)?;
-    if let Some(e) = a.restitution {
-        case = case.with_restitution("--restitution", e)?;
-    }
+    let (case, _) = ShearCase::build(&CaseRequest {
+        preset,
+        rolling,
+        mu_r: a.mu_r,
+        eta_r: a.eta_r,
+        seed: a.seed,
+        protocol: Protocol::default(),
+        overrides: Overrides {
+            restitution: a.restitution,
+            ..Overrides::default()
+        },
+        allow_inertial: false,
+    })?;
     let states = match &a.at {
         Some(v) => v.clone(),
         None => default_states(&case, a.states, a.steps, a.shear_span),
     };
-    let out = a
-        .out
-        .clone()
-        .unwrap_or_else(|| crate::cli::default_out("replay"));
+    let out = out_or_default(a.out.as_deref(), "replay");
     Ok(ReplayRequest {
         case,
         states,
@@ -133,9 +134,9 @@ pub fn request(a: &ReplayArgs) -> Result<ReplayRequest> {
     })
 }
 
-pub fn replay(a: ReplayArgs) -> Result<Outcome> {
+pub fn replay(a: ReplayArgs) -> Result<Verdict> {
     let req = request(&a)?;
-    let lig = Liggghts::locate(a.liggghts.as_deref(), Duration::from_secs(a.timeout))?;
+    let lig = a.liggghts.request(REPLAY_TIMEOUT_S).locate()?;
     std::fs::create_dir_all(&req.out).map_err(|e| Error::io(&req.out, e))?;
     let o = run(&req, &lig, |m| eprintln!("{m}"))?;
     print!("{}", table(&o));
@@ -144,9 +145,5 @@ pub fn replay(a: ReplayArgs) -> Result<Outcome> {
         req.out.join("summary.json").display(),
         req.out.join("error.svg").display()
     );
-    Ok(if o.pass {
-        Outcome::Agree
-    } else {
-        Outcome::Disagree
-    })
+    Ok(Verdict::from_pass(o.pass))
 }

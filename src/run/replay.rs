@@ -29,7 +29,7 @@ use crate::solver::vec3::V3;
 use crate::spec::shear::{NeighborSchedule, ShearCase};
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Schema version of `summary.json`.
@@ -39,6 +39,9 @@ pub const SCHEMA: u32 = 1;
 /// does not depend on particle positions, so the native side can reproduce it (and the bottom
 /// mesh's wrap steps) from the plates alone. Plates still force rebuilds as in production.
 pub const REPLAY_NEIGHBOR_EVERY: u64 = 10;
+
+/// Default timeout of the replay's LIGGGHTS run [s] (one recorded shear run).
+pub const REPLAY_TIMEOUT_S: u64 = 3600;
 
 /// Step-1 tolerance: only the order of force summation differs.
 pub const STEP1_RTOL: f64 = 1e-12;
@@ -223,9 +226,9 @@ pub fn check_states(case: &ShearCase, states: &[u64], k: u64) -> Result<()> {
 struct Dumped {
     state: RecordedState,
     /// (id1 - 1, id2 - 1) -> force, torque on id1, history, periodic flag.
-    pairs: HashMap<(u32, u32), (V3, V3, ContactHistory, bool)>,
+    pairs: BTreeMap<(u32, u32), (V3, V3, ContactHistory, bool)>,
     /// (atom - 1, mesh, triangle) -> force, torque, history.
-    walls: HashMap<(u32, u8, u32), (V3, V3, ContactHistory)>,
+    walls: BTreeMap<(u32, u8, u32), (V3, V3, ContactHistory)>,
 }
 
 fn parse_err(path: &Path, msg: impl Into<String>) -> Error {
@@ -334,7 +337,7 @@ fn read_dumped(
     }
     let ncol = 9 + n_hist;
     let pp = dir.join(format!("{REPLAY_PAIRS}{step}.dump"));
-    let mut pairs = HashMap::new();
+    let mut pairs = BTreeMap::new();
     for r in dump_rows(&pp, step, ncol)? {
         let (a, b) = (r[0] as usize, r[1] as usize);
         if a == 0 || b == 0 || a > atoms || b > atoms || a == b {
@@ -349,7 +352,7 @@ fn read_dumped(
         pairs.insert(key, (v3(&r, 3), v3(&r, 6), h, r[2] != 0.0));
     }
     let pw = dir.join(format!("{REPLAY_WALLS}{step}.dump"));
-    let mut walls = HashMap::new();
+    let mut walls = BTreeMap::new();
     for r in dump_rows(&pw, step, ncol)? {
         let (m, t, a) = (r[0] as usize, r[1] as usize, r[2] as usize);
         if m > 1 || t >= ntri[m.min(1)] || a == 0 || a > atoms {
@@ -425,8 +428,8 @@ struct Side {
     omega: Vec<V3>,
     f: Vec<V3>,
     torque: Vec<V3>,
-    pairs: HashMap<(u32, u32), ContactValues>,
-    walls: HashMap<(u32, u8, u32), ContactValues>,
+    pairs: BTreeMap<(u32, u32), ContactValues>,
+    walls: BTreeMap<(u32, u8, u32), ContactValues>,
     top: V3,
     bottom: V3,
 }
@@ -448,14 +451,14 @@ fn pair_kind(o: &PairObservation) -> String {
 /// The native side, its pairs oriented like `like` (LIGGGHTS' keys) where a key exists.
 fn native_side(
     sim: &ShearSim,
-    like: &HashMap<(u32, u32), (V3, V3, ContactHistory, bool)>,
+    like: &BTreeMap<(u32, u32), (V3, V3, ContactHistory, bool)>,
 ) -> Result<Side> {
     let (pairs, walls) = sim.observe_contacts()?;
     let neg = |h: ContactHistory| ContactHistory {
         shear: h.shear.map(|c| -c),
         r_torque: h.r_torque.map(|c| -c),
     };
-    let mut p = HashMap::new();
+    let mut p = BTreeMap::new();
     for o in &pairs {
         let kind = pair_kind(o);
         if like.contains_key(&(o.j, o.i)) {
@@ -565,9 +568,9 @@ fn compare(a: &Side, b: &Side) -> Vec<ChannelError> {
             .or_else(|| b.pairs.get(k))
             .is_some_and(|e| e.3.contains("periodic"))
     };
-    let split = |m: &HashMap<(u32, u32), ContactValues>,
+    let split = |m: &BTreeMap<(u32, u32), ContactValues>,
                  want: bool|
-     -> HashMap<(u32, u32), ContactValues> {
+     -> BTreeMap<(u32, u32), ContactValues> {
         m.iter()
             .filter(|(k, _)| periodic(k) == want)
             .map(|(k, v)| (*k, v.clone()))
@@ -606,9 +609,9 @@ fn compare(a: &Side, b: &Side) -> Vec<ChannelError> {
 
 /// Force, torque, shear and rolling history of the contacts both sides hold (`<what>_force`,
 /// ...); a contact held by one side only is counted in `missing` (count, last item).
-fn contact_channels<K: std::hash::Hash + Eq>(
-    a: &HashMap<K, ContactValues>,
-    b: &HashMap<K, ContactValues>,
+fn contact_channels<K: Ord>(
+    a: &BTreeMap<K, ContactValues>,
+    b: &BTreeMap<K, ContactValues>,
     what: &str,
     name: impl Fn(&K, &str) -> String,
     missing: &mut (usize, String),
@@ -727,7 +730,7 @@ pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Resu
         dir.display()
     ));
     lig.run(&deck, &dir)?;
-    let thermo: HashMap<u64, Vec<f64>> = read_thermo(&dir.join(LOG_NAME), THERMO_COLUMNS.len())?
+    let thermo: BTreeMap<u64, Vec<f64>> = read_thermo(&dir.join(LOG_NAME), THERMO_COLUMNS.len())?
         .into_iter()
         .collect();
     let log = dir.join(LOG_NAME);
@@ -1070,8 +1073,17 @@ mod tests {
 
     #[test]
     fn default_states_are_valid_windows() {
-        let c = replay_case(&ShearCase::preset("ci", RollingModel::Epsd, 0.5, 0.0, 1).unwrap())
-            .unwrap();
+        let c = replay_case(
+            &ShearCase::preset(
+                crate::spec::shear::Preset::Ci,
+                RollingModel::Epsd,
+                0.5,
+                0.0,
+                1,
+            )
+            .unwrap(),
+        )
+        .unwrap();
         let s = default_states(&c, 6, 12, 20_000);
         assert_eq!(s.len(), 6);
         check_states(&c, &s, 12).unwrap();

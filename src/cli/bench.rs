@@ -1,0 +1,53 @@
+//! `verify bench`: flags -> [`BenchRequest`] -> [`crate::run::bench`].
+
+use crate::cli::{LiggghtsArgs, PresetArg};
+use crate::error::Result;
+use crate::run::bench::{run, BenchRequest};
+use crate::run::{out_or_default, Verdict, SHEAR_TIMEOUT_S};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Parameter preset of the state: fast or paper (same particles and materials).
+    #[arg(long, value_enum, default_value = "fast")]
+    pub preset: PresetArg,
+    /// Timed steps per code.
+    #[arg(long, default_value_t = 2000)]
+    pub steps: u64,
+    /// Native thread counts to measure.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub threads: Vec<usize>,
+    /// LIGGGHTS process counts to measure (2 runs `mpirun --allow-run-as-root -np 2`).
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub procs: Vec<usize>,
+    /// Particle count: the 2500-particle sample tiled k x k times (rounded to a square).
+    #[arg(long, default_value_t = 2500)]
+    pub particles: usize,
+    /// Compression steps that make the dense state.
+    #[arg(long, default_value_t = 40_000)]
+    pub compression_steps: u64,
+    /// Skip LIGGGHTS (native only).
+    #[arg(long)]
+    pub native_only: bool,
+    #[command(flatten)]
+    pub liggghts: LiggghtsArgs,
+    /// Output directory (default: a new directory under ./runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+pub fn bench(a: BenchArgs) -> Result<Verdict> {
+    let req = BenchRequest {
+        preset: a.preset.into(),
+        steps: a.steps,
+        threads: a.threads.clone(),
+        procs: a.procs.clone(),
+        particles: a.particles,
+        compression_steps: a.compression_steps,
+        liggghts: (!a.native_only).then(|| a.liggghts.request(SHEAR_TIMEOUT_S)),
+        out: out_or_default(a.out.as_deref(), "bench"),
+    };
+    run(&req)?;
+    Ok(Verdict::Agree)
+}

@@ -1,0 +1,48 @@
+//! `verify convergence`: flags -> [`ConvergenceRequest`] -> [`crate::run::convergence`].
+//! The same shear case from the same compacted state at successively smaller time steps.
+
+use crate::cli::shear::ShearArgs;
+use crate::cli::EngineArg;
+use crate::error::{Error, Result};
+use crate::run::convergence::{run, ConvergenceRequest};
+use crate::run::Verdict;
+use clap::Args;
+
+#[derive(Args, Debug, Clone)]
+pub struct ConvergenceArgs {
+    /// The shear case: every `verify shear` option (preset, mu_r, eta_r, rolling, seeds, ...).
+    #[command(flatten)]
+    pub case: ShearArgs,
+    /// Factors applied to the preset's dt, largest first.
+    #[arg(long, value_delimiter = ',', default_value = "1,0.5,0.25")]
+    pub dt_factors: Vec<f64>,
+    /// native, liggghts or both.
+    #[arg(long, value_enum, default_value = "native")]
+    pub engine: EngineArg,
+    /// The dt factors at which LIGGGHTS runs (with --engine liggghts|both); a subset of
+    /// --dt-factors. Default: all of them. LIGGGHTS at the smallest dt is the costliest run.
+    #[arg(long, value_delimiter = ',')]
+    pub liggghts_dt_factors: Option<Vec<f64>>,
+    /// Also run the native stable-dashpot model (`epsd_implicit`) at the largest dt factor,
+    /// from the same compacted state: does it give at that dt what epsd gives converged?
+    /// Only with --rolling epsd.
+    #[arg(long)]
+    pub with_implicit: bool,
+}
+
+pub fn convergence(a: ConvergenceArgs) -> Result<Verdict> {
+    if a.case.native_only || a.case.liggghts_only {
+        return Err(Error::invalid(
+            "--native-only/--liggghts-only",
+            "given",
+            "--engine native|liggghts|both for verify convergence",
+        ));
+    }
+    let req = ConvergenceRequest {
+        shear: a.case.request(a.engine.into(), "convergence"),
+        dt_factors: a.dt_factors.clone(),
+        liggghts_dt_factors: a.liggghts_dt_factors.clone(),
+        with_implicit: a.with_implicit,
+    };
+    Ok(run(&req)?.verdict())
+}

@@ -1,0 +1,285 @@
+//! Command-line interface: argument parsing (clap), then each command as a function that
+//! returns an [`Outcome`]. `main` maps outcomes to exit codes: 0 agree, 1 disagree, 2 error.
+
+pub mod bench;
+pub mod convergence;
+pub mod nightly;
+pub mod replay;
+pub mod shear;
+pub mod sweep;
+
+use crate::compare::CONTACT_RTOL;
+use crate::error::{Error, Result};
+use crate::liggghts::Liggghts;
+use crate::report::{channel_table, worst_table};
+use crate::run::contact::{
+    contact_runs, read_reference_version, run_all, write_decks, ContactRequest, RollingChoice,
+};
+use crate::run::{out_or_default, Engine, LiggghtsRequest, Verdict, CONTACT_TIMEOUT_S};
+use crate::spec::shear::Preset;
+use crate::spec::{builtin_case, RollingModel, BUILTIN_CASES};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::PathBuf;
+
+/// Rolling models on the command line (LIGGGHTS' keywords and the native epsd_implicit).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RollingArg {
+    Off,
+    Cdt,
+    Epsd,
+    Epsd2,
+    Epsd3,
+    #[value(name = "epsd_implicit")]
+    EpsdImplicit,
+}
+
+impl From<RollingArg> for RollingModel {
+    fn from(r: RollingArg) -> Self {
+        match r {
+            RollingArg::Off => RollingModel::Off,
+            RollingArg::Cdt => RollingModel::Cdt,
+            RollingArg::Epsd => RollingModel::Epsd,
+            RollingArg::Epsd2 => RollingModel::Epsd2,
+            RollingArg::Epsd3 => RollingModel::Epsd3,
+            RollingArg::EpsdImplicit => RollingModel::EpsdImplicit,
+        }
+    }
+}
+
+/// Which codes run (convergence, sweep).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum EngineArg {
+    Native,
+    Liggghts,
+    Both,
+}
+
+impl From<EngineArg> for Engine {
+    fn from(e: EngineArg) -> Self {
+        match e {
+            EngineArg::Native => Engine::Native,
+            EngineArg::Liggghts => Engine::Liggghts,
+            EngineArg::Both => Engine::Both,
+        }
+    }
+}
+
+/// Shear presets on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum PresetArg {
+    Ci,
+    Fast,
+    Paper,
+}
+
+impl From<PresetArg> for Preset {
+    fn from(p: PresetArg) -> Self {
+        match p {
+            PresetArg::Ci => Preset::Ci,
+            PresetArg::Fast => Preset::Fast,
+            PresetArg::Paper => Preset::Paper,
+        }
+    }
+}
+
+impl PresetArg {
+    pub fn keyword(self) -> &'static str {
+        Preset::from(self).keyword()
+    }
+}
+
+/// Where LIGGGHTS is and how long one run may take (every command that runs it).
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct LiggghtsArgs {
+    /// LIGGGHTS binary.
+    #[arg(long)]
+    pub liggghts: Option<PathBuf>,
+    /// Timeout of one LIGGGHTS run [s] (default: 600 for contact cases, 7 days for shear runs).
+    #[arg(long)]
+    pub timeout: Option<u64>,
+}
+
+impl LiggghtsArgs {
+    /// The request, with the study's default timeout when --timeout is not given.
+    pub fn request(&self, default_timeout_s: u64) -> LiggghtsRequest {
+        LiggghtsRequest {
+            binary: self.liggghts.clone(),
+            timeout_s: self.timeout.unwrap_or(default_timeout_s),
+        }
+    }
+}
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "verify",
+    version,
+    about = "Native DEM solver cross-validated against LIGGGHTS 3.8.0",
+    after_help = "Examples:\n  \
+        verify contact --case rolling_plastic          # one case, every rolling model, live LIGGGHTS\n  \
+        verify contact                                 # every built-in case\n  \
+        verify contact --reference                     # against stored LIGGGHTS outputs, no LIGGGHTS needed\n  \
+        verify contact --spec my_case.toml --rolling epsd2\n  \
+        verify contact --list\n  \
+        verify decks                                   # regenerate liggghts_inputs/\n  \
+        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n  \
+        verify replay --mu-r 0.5 --preset ci             # the gouge contact by contact from LIGGGHTS' states\n  \
+        verify nightly --out runs/nightly/today          # everything, report.html\n\n\
+        Exit status: 0 agree, 1 disagree, 2 error."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Two-particle (and particle-wall) contact histories: native vs LIGGGHTS, channel by channel.
+    Contact(ContactArgs),
+    /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
+    Shear(shear::ShearArgs),
+    /// Time-step convergence: the same case from the same compacted state at smaller dt.
+    Convergence(convergence::ConvergenceArgs),
+    /// Every contact case and the nightly shear cases in both codes: report.html, summary.json,
+    /// history.
+    Nightly(nightly::NightlyArgs),
+    /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,
+    /// report with the paper's figures and conclusions.
+    Sweep(sweep::SweepArgs),
+    /// The sheared gouge contact by contact: native restarted from LIGGGHTS' recorded states
+    /// (histories included) and compared with LIGGGHTS' next steps.
+    Replay(replay::ReplayArgs),
+    /// Throughput of both codes on the same dense shear state (particle-steps per second).
+    Bench(bench::BenchArgs),
+    /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
+    Decks {
+        #[arg(long, default_value = "liggghts_inputs")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct ContactArgs {
+    /// Built-in case name, or `all`.
+    #[arg(long, default_value = "all", conflicts_with = "spec")]
+    pub case: String,
+    /// A case file (TOML) of your own instead of a built-in case.
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Rolling model: off, cdt, epsd, epsd2, epsd3, or `all` (those the case lists).
+    #[arg(long, default_value = "all")]
+    pub rolling: String,
+    /// Relative tolerance: max |error| / channel peak.
+    #[arg(long, default_value_t = CONTACT_RTOL)]
+    pub rtol: f64,
+    /// Output directory (default: a new directory under ./runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Compare against the stored LIGGGHTS outputs in reference/ instead of running LIGGGHTS.
+    #[arg(long)]
+    pub reference: bool,
+    /// Run LIGGGHTS and store its outputs as the new reference (with provenance).
+    #[arg(long, conflicts_with = "reference")]
+    pub update_reference: bool,
+    /// Directory of stored reference outputs.
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/reference"))]
+    pub reference_dir: PathBuf,
+    /// List the built-in cases and exit.
+    #[arg(long)]
+    pub list: bool,
+    #[command(flatten)]
+    pub liggghts: LiggghtsArgs,
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<Verdict> {
+    match cli.command {
+        Command::Contact(a) => contact(a),
+        Command::Shear(a) => shear::shear(a),
+        Command::Bench(a) => bench::bench(a),
+        Command::Replay(a) => replay::replay(a),
+        Command::Nightly(a) => nightly::nightly(a),
+        Command::Sweep(a) => sweep::sweep(a),
+        Command::Convergence(a) => convergence::convergence(a),
+        Command::Decks { out } => {
+            let n = write_decks(&out)?;
+            println!("wrote {n} decks under {}", out.display());
+            Ok(Verdict::Agree)
+        }
+    }
+}
+
+fn contact(a: ContactArgs) -> Result<Verdict> {
+    if a.list {
+        for (name, _) in BUILTIN_CASES {
+            let c = builtin_case(name)?;
+            let models: Vec<&str> = c.applicable_rolling().iter().map(|m| m.keyword()).collect();
+            println!("{name:<22} [{}] {}", models.join(","), c.description);
+        }
+        return Ok(Verdict::Agree);
+    }
+    if !(a.rtol.is_finite() && a.rtol > 0.0) {
+        return Err(Error::invalid("--rtol", a.rtol, "a finite number > 0"));
+    }
+    let rolling = match a.rolling.as_str() {
+        "all" => RollingChoice::All,
+        m => RollingChoice::One(RollingModel::parse(m)?),
+    };
+    let runs = contact_runs(&a.case, a.spec.as_deref(), rolling)?;
+    let lig: Option<Liggghts> = if a.reference {
+        None
+    } else {
+        Some(a.liggghts.request(CONTACT_TIMEOUT_S).locate()?)
+    };
+    let req = ContactRequest {
+        rtol: a.rtol,
+        reference_dir: a.reference_dir.clone(),
+        update_reference: a.update_reference,
+    };
+    let version = match &lig {
+        Some(l) => l.version(),
+        None => read_reference_version(&a.reference_dir),
+    };
+    let out = out_or_default(a.out.as_deref(), "contact");
+    println!(
+        "verify contact: {} run(s), against {}, rtol {:e}, output {}",
+        runs.len(),
+        if a.reference {
+            "stored reference"
+        } else {
+            "live LIGGGHTS"
+        },
+        a.rtol,
+        out.display()
+    );
+    for case in &runs {
+        for w in &case.warnings {
+            eprintln!("warning: {}/{}: {w}", case.name, case.models.rolling);
+        }
+    }
+    let against = if a.reference { "reference" } else { "live" };
+    let summary = run_all(
+        &runs,
+        &req,
+        lig.as_ref(),
+        &out,
+        against,
+        version,
+        |case, results, secs| {
+            let pass = results.iter().all(|r| r.pass);
+            let worst = results.iter().map(|r| r.max_rel_err).fold(0.0, f64::max);
+            println!(
+                "{:<22} {:<6} max rel err {:>10.3e}  {}  ({secs:.1} s)",
+                case.name,
+                case.models.rolling.keyword(),
+                worst,
+                if pass { "agree" } else { "DISAGREE" },
+            );
+            if !pass {
+                print!("{}", channel_table(results));
+            }
+        },
+    )?;
+    println!("\n{}", worst_table(&summary));
+    println!("summary: {}", out.join("summary.json").display());
+    Ok(Verdict::from_pass(summary.pass))
+}

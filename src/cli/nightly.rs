@@ -1,0 +1,34 @@
+//! `verify nightly`: flags -> [`NightlyRequest`] -> [`crate::run::nightly`]: every contact case
+//! and the nightly shear points in both codes, report.html, summary.json, history.
+
+use crate::cli::LiggghtsArgs;
+use crate::error::Result;
+use crate::run::nightly::{run, NightlyRequest};
+use crate::run::{Verdict, SHEAR_TIMEOUT_S};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct NightlyArgs {
+    /// Output directory of this night (report.html, summary.json, every run's files).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// CI-sized night: the ci shear preset with one seed (minutes instead of hours).
+    #[arg(long)]
+    pub quick: bool,
+    /// History file (JSON lines, one per case per night; default: history.jsonl next to --out).
+    #[arg(long)]
+    pub history: Option<PathBuf>,
+    #[command(flatten)]
+    pub liggghts: LiggghtsArgs,
+}
+
+pub fn nightly(a: NightlyArgs) -> Result<Verdict> {
+    let req = NightlyRequest {
+        out: a.out,
+        quick: a.quick,
+        history: a.history,
+        liggghts: a.liggghts.request(SHEAR_TIMEOUT_S),
+    };
+    Ok(run(&req)?.verdict())
+}

@@ -1,0 +1,168 @@
+//! `verify shear`: flags -> [`ShearRequest`] -> the shear study ([`crate::run::shear`]) ->
+//! printed figures, exit status.
+
+use crate::cli::{LiggghtsArgs, PresetArg, RollingArg};
+use crate::compare::{MU_ATOL, STRESS_RTOL};
+use crate::error::Result;
+use crate::run::shear::{print_summary, run, ShearRequest};
+use crate::run::{out_or_default, Engine, Verdict, SHEAR_TIMEOUT_S};
+use crate::spec::shear::{CaseRequest, Overrides, Protocol};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+pub struct ShearArgs {
+    /// Rolling friction coefficient mu_r.
+    #[arg(long, default_value_t = 0.0)]
+    pub mu_r: f64,
+    /// Rolling viscous damping eta_r (epsd and epsd3 only).
+    #[arg(long, default_value_t = 0.0)]
+    pub eta_r: f64,
+    /// Rolling model (the paper's: epsd).
+    #[arg(long, value_enum, default_value = "epsd")]
+    pub rolling: RollingArg,
+    /// Preset: ci (few hundred particles, minutes), fast (paper box, nightly), paper.
+    #[arg(long, value_enum, default_value = "fast")]
+    pub preset: PresetArg,
+    /// Number of seeds (initial packings).
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// First seed: runs seeds first-seed ..= first-seed + seeds - 1.
+    #[arg(long, default_value_t = 1)]
+    pub first_seed: u64,
+    #[command(flatten)]
+    pub protocol: ProtocolArgs,
+    /// Threads of the native solver (default: all cores, minus one while LIGGGHTS runs).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output directory (default: a new directory under ./runs/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run only the native solver.
+    #[arg(long, conflicts_with = "liggghts_only")]
+    pub native_only: bool,
+    /// Run only LIGGGHTS.
+    #[arg(long)]
+    pub liggghts_only: bool,
+    /// Allow stages with inertial number I > 1e-3.
+    #[arg(long)]
+    pub allow_inertial: bool,
+    /// Write particle snapshots (VTK, for ParaView) every N steps (0: the preset's choice).
+    #[arg(long, default_value_t = 0)]
+    pub snapshot_every: u64,
+    /// Refuse to run (exit 2) when the explicit rolling dashpot is expected to be unstable.
+    #[arg(long)]
+    pub strict_stability: bool,
+    /// Flat plates instead of plates with teeth (flat plates let the gouge slip).
+    #[arg(long)]
+    pub flat_plates: bool,
+    /// Tooth height [m] of the plates (default 2e-4).
+    #[arg(long)]
+    pub tooth_height: Option<f64>,
+    /// Tooth wavelength [m] along x; box_x must hold a whole number of teeth (default 5e-4).
+    #[arg(long)]
+    pub tooth_wavelength: Option<f64>,
+    /// Particle count (the preset's box is scaled in x and z to keep the sample height).
+    #[arg(long)]
+    pub particles: Option<usize>,
+    /// Coefficient of normal restitution (the paper's Table 2: 1, no normal damping; the
+    /// presets still use 0.5). LIGGGHTS accepts 0.05 < e <= 1.
+    #[arg(long)]
+    pub restitution: Option<f64>,
+    /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (their 95 % CIs must
+    /// also overlap). The default suits 3 seeds of 2500 particles; one seed of the ci preset
+    /// fluctuates more (seed-to-seed spread about 0.03).
+    #[arg(long, default_value_t = MU_ATOL)]
+    pub mu_atol: f64,
+    /// Largest accepted relative deviation of each code's mean normal stress (steady window,
+    /// mean over seeds) from the target. One seed of the ci preset fluctuates by about 1-2 %.
+    #[arg(long, default_value_t = STRESS_RTOL)]
+    pub stress_rtol: f64,
+    #[command(flatten)]
+    pub liggghts: LiggghtsArgs,
+}
+
+/// Changes to a preset's shear protocol, shared by `verify shear`, `verify sweep` and
+/// `verify convergence` ([`Protocol`]).
+#[derive(Args, Debug, Clone, PartialEq)]
+pub struct ProtocolArgs {
+    /// Shear speeds [m/s], comma separated: stages in sequence, as in the paper (replaces the
+    /// preset's stages).
+    #[arg(long, value_delimiter = ',')]
+    pub speeds: Option<Vec<f64>>,
+    /// Shear strain of each stage (replaces the preset's).
+    #[arg(long)]
+    pub strain: Option<f64>,
+    /// Time step as a multiple of the preset's (compression steps and output interval scale
+    /// with 1 / factor, so the same physical time and strain are covered): runs a case at a
+    /// converged dt, e.g. 0.25.
+    #[arg(long, default_value_t = 1.0)]
+    pub dt_factor: f64,
+}
+
+impl From<&ProtocolArgs> for Protocol {
+    fn from(p: &ProtocolArgs) -> Self {
+        Protocol {
+            speeds: p.speeds.clone(),
+            strain: p.strain,
+            dt_factor: p.dt_factor,
+        }
+    }
+}
+
+impl ShearArgs {
+    /// The engine the flags ask for.
+    pub fn engine(&self) -> Engine {
+        match (self.native_only, self.liggghts_only) {
+            (true, _) => Engine::Native,
+            (_, true) => Engine::Liggghts,
+            _ => Engine::Both,
+        }
+    }
+
+    /// The case the flags describe (its seed: --first-seed).
+    pub fn case_request(&self) -> CaseRequest {
+        CaseRequest {
+            preset: self.preset.into(),
+            rolling: self.rolling.into(),
+            mu_r: self.mu_r,
+            eta_r: self.eta_r,
+            seed: self.first_seed,
+            protocol: (&self.protocol).into(),
+            overrides: Overrides {
+                snapshot_every: self.snapshot_every,
+                restitution: self.restitution,
+                flat_plates: self.flat_plates,
+                tooth_height: self.tooth_height,
+                tooth_wavelength: self.tooth_wavelength,
+                particles: self.particles,
+            },
+            allow_inertial: self.allow_inertial,
+        }
+    }
+
+    /// The request the flags describe, run by `engine`, written to `prefix`'s default
+    /// directory when --out is not given.
+    pub fn request(&self, engine: Engine, prefix: &str) -> ShearRequest {
+        ShearRequest {
+            case: self.case_request(),
+            seeds: self.seeds,
+            engine,
+            threads: self.threads,
+            out: out_or_default(self.out.as_deref(), prefix),
+            quiet: false,
+            strict_stability: self.strict_stability,
+            mu_atol: self.mu_atol,
+            stress_rtol: self.stress_rtol,
+            liggghts: self.liggghts.request(SHEAR_TIMEOUT_S),
+        }
+    }
+}
+
+/// `verify shear`: runs, prints, writes `summary.json`; the verdict of its comparisons.
+pub fn shear(a: ShearArgs) -> Result<Verdict> {
+    let req = a.request(a.engine(), &format!("shear-{}", a.preset.keyword()));
+    let summary = run(&req)?;
+    print_summary(&summary, &req.out);
+    Ok(summary.verdict())
+}

@@ -1,0 +1,252 @@
+//! `verify sweep`: the paper's parametric study. Plans a manifest, runs it locally N at a time
+//! (resumable), or emits a SLURM job array that calls `verify sweep run-one` per entry;
+//! `collect` gathers results, `report` draws the paper's figures and checks its conclusions.
+
+use crate::cli::shear::ProtocolArgs;
+use crate::cli::{EngineArg, PresetArg, RollingArg};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::report::sweep::report;
+use crate::run::sweep::{
+    collect_dir, plan, run_one, run_pending, slurm_script, CodeStage, Manifest, RunResult,
+    SweepBase, SweepRequest,
+};
+use crate::run::Verdict;
+use clap::{Args, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true)]
+pub struct SweepArgs {
+    #[command(subcommand)]
+    pub action: Option<SweepAction>,
+    #[command(flatten)]
+    pub plan: PlanArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum SweepAction {
+    /// Runs one entry of a manifest (what each SLURM array task calls); skips it when its
+    /// current result exists.
+    RunOne {
+        #[arg(long)]
+        manifest: PathBuf,
+        #[arg(long)]
+        index: usize,
+        /// Native solver threads (default: 1).
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
+    },
+    /// Gathers every run's result into DIR/results.json and DIR/results.csv.
+    Collect { dir: PathBuf },
+    /// The paper's figures and conclusions from DIR's results (DIR/report.html).
+    Report {
+        dir: PathBuf,
+        /// Results at a smaller dt, shown beside these; the conclusions are judged on them
+        /// too. Either a second sweep of the same points (`--dt-factor`) or the output of a
+        /// `verify convergence` study (its finest native dt); repeat for several.
+        #[arg(long)]
+        converged: Vec<PathBuf>,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct PlanArgs {
+    /// Rolling friction coefficients, comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.25, 0.5, 0.75, 1.0])]
+    pub mu_r: Vec<f64>,
+    /// Rolling viscous damping coefficients, comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.25, 0.5, 0.75])]
+    pub eta_r: Vec<f64>,
+    /// Seeds per point.
+    #[arg(long, default_value_t = 3)]
+    pub seeds: u64,
+    /// Shear preset: ci, fast, paper.
+    #[arg(long, value_enum, default_value = "fast")]
+    pub preset: PresetArg,
+    /// Rolling model.
+    #[arg(long, value_enum, default_value = "epsd")]
+    pub rolling: RollingArg,
+    /// Codes: native, liggghts, both.
+    #[arg(long, value_enum, default_value = "native")]
+    pub engine: EngineArg,
+    #[command(flatten)]
+    pub protocol: ProtocolArgs,
+    /// Sweep directory (manifest, runs, results, report).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Runs at a time (each uses one core per code).
+    #[arg(long, default_value_t = 1)]
+    pub jobs: usize,
+    /// Native solver threads per run (default: every core with one job of the native engine,
+    /// else 1).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Write a scheduler script for the manifest instead of running: `slurm`.
+    #[arg(long, value_enum)]
+    pub emit: Option<Scheduler>,
+}
+
+/// Schedulers a sweep can emit a script for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Scheduler {
+    Slurm,
+}
+
+pub fn sweep(a: SweepArgs) -> Result<Verdict> {
+    match a.action {
+        Some(SweepAction::RunOne {
+            manifest,
+            index,
+            threads,
+        }) => {
+            let m = Manifest::load(&manifest)?;
+            let dir = manifest
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."));
+            if threads == 0 {
+                return Err(Error::invalid("--threads", 0, ">= 1"));
+            }
+            let t = Instant::now();
+            let (res, ran) = run_one(&m, dir, index, threads)?;
+            println!(
+                "run {index} ({}): {} in {:.1} s; {}",
+                res.run.id,
+                if ran {
+                    "done"
+                } else {
+                    "result current, skipped"
+                },
+                t.elapsed().as_secs_f64(),
+                stage_line(&res)
+            );
+            Ok(Verdict::Agree)
+        }
+        Some(SweepAction::Collect { dir }) => {
+            let (results, total) = collect_dir(&dir)?;
+            println!(
+                "collected {} of {total} runs into {}",
+                results.len(),
+                dir.join("results.csv").display()
+            );
+            Ok(Verdict::Agree)
+        }
+        Some(SweepAction::Report { dir, converged }) => {
+            report(&dir, &converged)?;
+            Ok(Verdict::Agree)
+        }
+        None => plan_and_run(a.plan),
+    }
+}
+
+fn stage_line(r: &RunResult) -> String {
+    r.stages
+        .iter()
+        .map(|s| {
+            let f = |c: &Option<CodeStage>| {
+                c.as_ref()
+                    .map(|c| format!("{:.3}", c.mu))
+                    .unwrap_or("-".into())
+            };
+            format!(
+                "v {} m/s: mu LIGGGHTS {} native {}",
+                s.speed,
+                f(&s.liggghts),
+                f(&s.native)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
+    let out = p
+        .out
+        .clone()
+        .ok_or_else(|| Error::invalid("--out", "(missing)", "the sweep directory (required)"))?;
+    let req = SweepRequest {
+        base: SweepBase {
+            preset: p.preset.into(),
+            rolling: p.rolling.into(),
+            engine: p.engine.into(),
+            protocol: (&p.protocol).into(),
+        },
+        mu_r: p.mu_r.clone(),
+        eta_r: p.eta_r.clone(),
+        seeds: p.seeds,
+        out: out.clone(),
+        jobs: p.jobs,
+        threads: p.threads,
+    };
+    let m = plan(&req)?;
+    let mpath = out.join("manifest.json");
+    println!(
+        "verify sweep: {} runs ({} mu_r x {} eta_r x {} seeds), preset {}, {}, engine {}, dt factor {}; {}",
+        m.runs.len(),
+        p.mu_r.len(),
+        p.eta_r.len(),
+        p.seeds,
+        m.base.preset,
+        m.base.rolling,
+        format!("{:?}", m.base.engine).to_lowercase(),
+        p.protocol.dt_factor,
+        mpath.display()
+    );
+    if p.emit == Some(Scheduler::Slurm) {
+        let exe = std::env::current_exe().map_err(|e| Error::io("verify binary", e))?;
+        let script = slurm_script(&m, &out, &exe)?;
+        std::fs::create_dir_all(out.join("logs")).map_err(|e| Error::io(&out, e))?;
+        write_atomic(&out.join("sweep.sbatch"), script.as_bytes())?;
+        println!(
+            "wrote {} ({} array tasks). Submit with\n  sbatch {}\nthen\n  verify sweep collect {}\n  verify sweep report {}",
+            out.join("sweep.sbatch").display(),
+            m.runs.len(),
+            out.join("sweep.sbatch").display(),
+            out.display(),
+            out.display()
+        );
+        return Ok(Verdict::Agree);
+    }
+    let done = m
+        .runs
+        .iter()
+        .filter(|r| crate::run::sweep::current_result(&out, r).is_some())
+        .count();
+    if done > 0 {
+        println!("  {done} runs already have a current result: skipped");
+    }
+    let bar = ProgressBar::new(m.runs.len() as u64).with_position(done as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "sweep {bar:30} {pos}/{len} runs  elapsed {elapsed_precise}  ETA {eta_precise}  {msg}",
+        )
+        .expect("template"),
+    );
+    let o = run_pending(&req, &m, &|r, res| {
+        match res {
+            Ok(res) => bar.println(format!("  {}: {}", res.run.id, stage_line(res))),
+            Err(msg) => bar.println(format!("  FAILED {msg}")),
+        }
+        bar.inc(1);
+        bar.set_message(format!("last: {}", r.id));
+    })?;
+    bar.finish();
+    println!(
+        "ran {} runs in {:.1} min",
+        o.results.len() + o.failures.len(),
+        o.wall_s / 60.0
+    );
+    if !o.failures.is_empty() {
+        return Err(Error::Cases(format!(
+            "{} run(s) failed (the others are kept; rerun the command to retry them):\n  {}",
+            o.failures.len(),
+            o.failures.join("\n  ")
+        )));
+    }
+    collect_dir(&out)?;
+    report(&out, &[])?;
+    Ok(Verdict::Agree)
+}

@@ -1,0 +1,528 @@
+//! The nightly report page: verdicts, tables, per-case figures and trends over the history of
+//! nights, one self-contained HTML file.
+
+use crate::compare::CONTACT_RTOL;
+use crate::error::Result;
+use crate::fsutil::write_atomic;
+use crate::report::bars::{bar_chart, escape, Bar, BarGroup};
+use crate::report::history::Record;
+use crate::report::html::{table, Page};
+use crate::report::plot::{line_plot, Curve, CurveData};
+use crate::run::nightly_outcome::{CodeStats, NightlySummary, ShearRow};
+use std::path::Path;
+
+fn status(pass: bool, error: &Option<String>) -> (String, &'static str) {
+    match (error, pass) {
+        (Some(_), _) => ("ERROR".into(), "fail"),
+        (None, true) => ("agree".into(), "pass"),
+        (None, false) => ("DISAGREE".into(), "fail"),
+    }
+}
+
+fn num(v: Option<f64>, prec: usize) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x:.prec$}"),
+        Some(x) => format!("{x}"),
+        None => "–".into(),
+    }
+}
+
+fn sci(v: f64) -> String {
+    if v == 0.0 {
+        "0 (bit for bit)".into()
+    } else if v.is_finite() {
+        format!("{v:.3e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// The report page.
+pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<String> {
+    let plots = out.join("plots");
+    let mut p = Page::new(&format!("verify nightly {}", s.date_utc));
+    p.html("<h1>Native DEM vs LIGGGHTS: nightly agreement report</h1>");
+    let (verdict, class) = if s.pass {
+        ("ALL CASES AGREE", "pass")
+    } else if s.errors.is_empty() {
+        ("DISAGREEMENT", "fail")
+    } else {
+        ("ERRORS", "fail")
+    };
+    p.html(&format!("<div class=\"banner {class}\">{verdict}</div>"));
+    let budget = match s.budget_s {
+        Some(b) => format!(
+            " (budget {:.1} h: {})",
+            b / 3600.0,
+            if s.wall_time_s <= b {
+                "within"
+            } else {
+                "OVER BUDGET"
+            }
+        ),
+        None => String::new(),
+    };
+    p.html(&format!(
+        "<p class=\"meta\">Night {} UTC, {} night ({}) · project commit <b>{}</b> · {} · machine {} · \
+         wall time <b>{:.1} min</b>{budget}</p>",
+        escape(&s.date_utc),
+        if s.quick { "quick" } else { "full" },
+        if s.quick {
+            "ci shear preset, 1 seed"
+        } else {
+            "fast shear preset, 3 seeds"
+        },
+        escape(&s.commit),
+        escape(&s.liggghts_version),
+        escape(&s.machine.describe()),
+        s.wall_time_s / 60.0,
+    ));
+    for e in &s.errors {
+        p.html(&format!("<p class=\"fail\">{}</p>", escape(e)));
+    }
+    let c_ok = s.contact.iter().filter(|c| c.pass).count();
+    let c_bit = s.contact.iter().filter(|c| c.max_rel_err == 0.0).count();
+    let s_ok = s.shear.iter().filter(|r| r.pass).count();
+    let dmu_max = s.shear.iter().filter_map(|r| r.dmu).fold(0.0, f64::max);
+    p.html(&format!(
+        "<p style=\"font-size:18px\">Contact laws: <b>{c_ok}/{}</b> runs agree ({c_bit} bit for bit). \
+         Shear box: <b>{s_ok}/{}</b> cases agree; largest |Δμ| between the codes {dmu_max:.3}.</p>",
+        s.contact.len(),
+        s.shear.len()
+    ));
+
+    // overview
+    p.heading("overview", "Overview");
+    let mut rows = Vec::new();
+    for r in &s.shear {
+        let (st, class) = status(r.pass, &r.error);
+        rows.push(vec![
+            (st, class),
+            ("shear".into(), ""),
+            (
+                format!("<a href=\"#{}\">{}</a>", anchor(&r.dir), escape(&r.name)),
+                "",
+            ),
+            (
+                format!(
+                    "|Δμ| = {}{}; normal stress off by {}",
+                    num(r.dmu, 4),
+                    match r.ci_overlap {
+                        Some(true) => ", CIs overlap",
+                        Some(false) => ", CIs do NOT overlap",
+                        None => "",
+                    },
+                    r.stress_rel_err
+                        .map(|e| format!("{:.2} %", 100.0 * e))
+                        .unwrap_or("–".into())
+                ),
+                "",
+            ),
+            (
+                format!(
+                    "|Δμ| ≤ {} and 95 % CIs overlap; stress within {} %",
+                    r.mu_atol,
+                    100.0 * r.stress_rtol
+                ),
+                "",
+            ),
+            match r.dashpot_stable {
+                Some(true) => ("stable".into(), "pass"),
+                Some(false) => ("explicit dashpot UNSTABLE at this dt".into(), "warn"),
+                None => ("–".into(), ""),
+            },
+        ]);
+    }
+    for r in &s.contact {
+        let (st, class) = status(r.pass, &r.error);
+        rows.push(vec![
+            (st, class),
+            ("contact".into(), ""),
+            (
+                format!(
+                    "<a href=\"#{}\">{} / {}</a>",
+                    anchor(&r.dir),
+                    escape(&r.case),
+                    escape(&r.model)
+                ),
+                "",
+            ),
+            (
+                match &r.error {
+                    Some(e) => escape(e),
+                    None if r.max_rel_err == 0.0 => "bit for bit in every channel".into(),
+                    None => format!(
+                        "max rel err {} ({})",
+                        sci(r.max_rel_err),
+                        escape(&r.worst_channel)
+                    ),
+                },
+                "",
+            ),
+            (format!("≤ {:.0e} of the channel peak", r.rtol), ""),
+            ("–".into(), ""),
+        ]);
+    }
+    p.html(&table(
+        &[
+            "status",
+            "kind",
+            "case",
+            "measured",
+            "tolerance",
+            "rolling dashpot",
+        ],
+        &rows,
+    ));
+
+    // steady friction
+    p.heading("steady", "Steady friction coefficient, both codes");
+    let groups: Vec<BarGroup> = s
+        .shear
+        .iter()
+        .map(|r| BarGroup {
+            label: format!("{} μr={} ηr={}", r.rolling, r.mu_r, r.eta_r),
+            bars: [&r.liggghts, &r.native]
+                .iter()
+                .enumerate()
+                .map(|(k, c)| Bar {
+                    value: c.as_ref().map(|c| c.mu).unwrap_or(f64::NAN),
+                    ci95: c.as_ref().map(|c| c.mu_ci95).unwrap_or(f64::NAN),
+                    color: k,
+                })
+                .collect(),
+        })
+        .collect();
+    let bars = bar_chart(
+        "steady mu = Fx / Fy (mean of the steady window, 95 % CI)",
+        "mu",
+        &groups,
+        &["LIGGGHTS", "native"],
+    );
+    write_atomic(&plots.join("steady_mu.svg"), bars.as_bytes())?;
+    let fig = p.svg(
+        &bars,
+        "Steady μ per shear case; whiskers: 95 % confidence interval (over seeds; one seed: over 10 blocks of the window).",
+    );
+    p.figures(&[fig]);
+
+    // trends
+    p.heading("trends", "Trends over nights");
+    let figs = trend_plots(&mut p, history, s, &plots)?;
+    p.figures(&figs);
+
+    // shear cases
+    p.heading("shear", "Shear cases");
+    for r in &s.shear {
+        shear_section(&mut p, r, out)?;
+    }
+
+    // performance
+    p.heading("performance", "Wall time and throughput");
+    let mut rows = Vec::new();
+    for r in &s.shear {
+        let c = |c: &Option<CodeStats>| {
+            c.as_ref()
+                .map(|c| {
+                    (
+                        format!("{:.0}", c.wall_s),
+                        format!("{:.3e}", c.particle_steps_per_s),
+                    )
+                })
+                .unwrap_or(("–".into(), "–".into()))
+        };
+        let (lw, lt) = c(&r.liggghts);
+        let (nw, nt) = c(&r.native);
+        let ratio = match (&r.liggghts, &r.native) {
+            (Some(l), Some(n)) => format!("{:.2}", n.particle_steps_per_s / l.particle_steps_per_s),
+            _ => "–".into(),
+        };
+        rows.push(vec![
+            (escape(&r.name), ""),
+            (lw, "num"),
+            (lt, "num"),
+            (nw, "num"),
+            (nt, "num"),
+            (ratio, "num"),
+        ]);
+    }
+    let contact_wall: f64 = s.contact.iter().map(|c| c.wall_s).sum();
+    p.html(&table(
+        &[
+            "shear case",
+            "LIGGGHTS wall [s]",
+            "LIGGGHTS particle-steps/s",
+            "native wall [s]",
+            "native particle-steps/s",
+            "native / LIGGGHTS",
+        ],
+        &rows,
+    ));
+    p.para(&format!(
+        "Each seed runs both codes side by side on this machine (LIGGGHTS one process, the native \
+         solver on the remaining cores), so the throughputs are measured under the same load; \
+         `verify bench` measures them on an idle machine. Contact cases: {} runs, {:.1} s in total \
+         (both codes). Whole night: {:.1} min.",
+        s.contact.len(),
+        contact_wall,
+        s.wall_time_s / 60.0
+    ));
+
+    // contact cases
+    p.heading("contact", "Contact cases");
+    p.para(
+        "Per run: the main channel (rolling moment, tangential or normal force) of LIGGGHTS (solid) \
+         and the native solver (dashed) overlaid, and the largest relative error over every channel \
+         (forces, moments, contact history, positions, velocities, angular velocities, torques) \
+         against time.",
+    );
+    for r in &s.contact {
+        p.html(&format!(
+            "<h3 id=\"{}\">{} / {} — {}</h3>",
+            anchor(&r.dir),
+            escape(&r.case),
+            escape(&r.model),
+            match &r.error {
+                Some(e) => format!("<span class=\"fail\">error: {}</span>", escape(e)),
+                None => format!(
+                    "max rel err {} (tolerance {:.0e})",
+                    sci(r.max_rel_err),
+                    r.rtol
+                ),
+            }
+        ));
+        let dir = out.join(&r.dir);
+        let mut figs = Vec::new();
+        for (f, cap) in [
+            ("history.svg", "both codes overlaid"),
+            ("error.svg", "relative error against time"),
+        ] {
+            if dir.join(f).is_file() {
+                figs.push(p.svg_file(&dir.join(f), cap)?);
+            }
+        }
+        p.figures(&figs);
+    }
+    p.para(
+        "Files: summary.json (schema in the README), contact/<case>_<model>/ and shear/<case>/ \
+         with each code's CSV, decks and logs; the history file holds one JSON line per case per night.",
+    );
+    Ok(p.finish())
+}
+
+fn anchor(dir: &str) -> String {
+    dir.replace(['/', '.'], "-")
+}
+
+fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
+    let (st, class) = status(r.pass, &r.error);
+    p.html(&format!(
+        "<h3 id=\"{}\">{} — <span class=\"{class}\">{st}</span></h3>",
+        anchor(&r.dir),
+        escape(&r.name)
+    ));
+    if let Some(e) = &r.error {
+        p.html(&format!("<pre class=\"fail\">{}</pre>", escape(e)));
+    }
+    if let Some(rp) = &r.replay {
+        let (st, class) = status(rp.pass, &None);
+        p.html(&format!(
+            "<p>Contact by contact (<code>verify replay</code>, seed 1): {} windows of {} steps \
+             from LIGGGHTS' recorded states, worst step-1 error {} (limit {}), shortest horizon \
+             {} steps: <span class=\"{class}\">{st}</span>.</p>",
+            rp.windows,
+            rp.steps,
+            sci(rp.worst_step1),
+            sci(rp.rtol),
+            rp.min_horizon
+        ));
+    }
+    if let Some(pd) = &r.paired_dmu {
+        p.html(&format!(
+            "<p>Paired over the same seeds, native − LIGGGHTS: {:+.4} ± {:.4} (95 % CI, {} seeds), \
+             t = {:.2}, native higher in {} of {}.</p>",
+            pd.mean, pd.ci95, pd.n, pd.t, pd.b_higher, pd.n
+        ));
+    }
+    let mut rows = Vec::new();
+    for (code, c) in [("LIGGGHTS", &r.liggghts), ("native", &r.native)] {
+        if let Some(c) = c {
+            rows.push(vec![
+                (code.to_string(), ""),
+                (format!("{:.4} ± {:.4}", c.mu, c.mu_ci95), "num"),
+                (
+                    c.per_seed_mu
+                        .iter()
+                        .map(|m| format!("{m:.4}"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    "num",
+                ),
+                (format!("{:.3}", c.normal_stress / 1e6), "num"),
+                (format!("{:.3e}", c.erot), "num"),
+                (format!("{:.3e}", c.ke), "num"),
+                (
+                    if c.mobilised.is_finite() {
+                        format!("{:.3}", c.mobilised)
+                    } else {
+                        "not output".into()
+                    },
+                    "num",
+                ),
+                (format!("{:.0}", c.wall_s), "num"),
+            ]);
+        }
+    }
+    p.html(&table(
+        &[
+            "code",
+            "steady μ (95 % CI)",
+            "per seed",
+            "normal stress [MPa]",
+            "mean E_rot [J]",
+            "mean E_kin [J]",
+            "rolling mobilised",
+            "wall [s]",
+        ],
+        &rows,
+    ));
+    p.para(&format!(
+        "Lockstep from a common compacted state: the codes agree (1e-6 of the peak: plate forces, \
+         top plate position, kinetic energies) for {} shear steps (shortest over seeds); chaos baseline (native vs native \
+         one ulp apart): {} steps. Stability of the explicit rolling dashpot: {}{}.",
+        r.lockstep_steps
+            .map(|v| v.saturating_sub(1).to_string())
+            .unwrap_or("–".into()),
+        r.chaos_baseline_steps
+            .map(|v| v.saturating_sub(1).to_string())
+            .unwrap_or("–".into()),
+        match r.dashpot_stable {
+            Some(true) => "stable",
+            Some(false) =>
+                "UNSTABLE (results may show the dashpot artefact; see `verify convergence`)",
+            None => "–",
+        },
+        r.worst_stability
+            .as_ref()
+            .map(|l| format!("; worst contact: {l}"))
+            .unwrap_or_default()
+    ));
+    let dir = out.join(&r.dir);
+    let mut figs = Vec::new();
+    for (f, cap) in [
+        ("mu_strain.svg", "μ(strain), both codes, every seed"),
+        ("shear_force.svg", "shear force on the top plate"),
+        ("top_force.svg", "normal force on the top plate"),
+        ("kinetic_energy.svg", "rotational kinetic energy"),
+        (
+            "mobilised.svg",
+            "fraction of touching pairs at full rolling mobilisation (native)",
+        ),
+    ] {
+        if dir.join(f).is_file() {
+            figs.push(p.svg_file(&dir.join(f), cap)?);
+        }
+    }
+    p.figures(&figs);
+    Ok(())
+}
+
+/// Trend plots from the history: largest contact error per case, steady mu per code and shear
+/// case, against days since the first night in the history.
+fn trend_plots(
+    p: &mut Page,
+    history: &[Record],
+    s: &NightlySummary,
+    plots: &Path,
+) -> Result<Vec<String>> {
+    let t0 = history.iter().map(|r| r.unix_time).min().unwrap_or(0);
+    let day = |r: &Record| (r.unix_time - t0) as f64 / 86400.0;
+    let nights = {
+        let mut n: Vec<&str> = history.iter().map(|r| r.night.as_str()).collect();
+        n.sort();
+        n.dedup();
+        n.len()
+    };
+    let mut figs = Vec::new();
+    // contact: one curve per case (largest over its models), and the tolerance
+    let mut cases: Vec<String> = s.contact.iter().map(|c| c.case.clone()).collect();
+    cases.dedup();
+    let mut data: Vec<(String, Vec<(f64, f64)>)> = Vec::new();
+    for case in &cases {
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        for r in history
+            .iter()
+            .filter(|r| r.kind == "contact" && r.case.split('/').next() == Some(case))
+        {
+            let e = r.max_err.unwrap_or(f64::NAN);
+            match pts.iter_mut().find(|q| q.0 == day(r)) {
+                Some(q) => q.1 = q.1.max(e),
+                None => pts.push((day(r), e)),
+            }
+        }
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        data.push((case.clone(), pts));
+    }
+    let span = history.iter().map(day).fold(0.0, f64::max).max(1.0);
+    let tol = vec![(0.0, CONTACT_RTOL), (span, CONTACT_RTOL)];
+    let mut curves: Vec<Curve> = data
+        .iter()
+        .enumerate()
+        .map(|(k, (l, pts))| Curve::new(l, pts, k + 2))
+        .collect();
+    curves.push(Curve::new("tolerance", &tol, 3).dashed());
+    let path = plots.join("trend_contact.svg");
+    line_plot(
+        &path,
+        "contact cases: largest relative error per night",
+        "days since the first night in the history",
+        "max rel err",
+        &curves,
+    )?;
+    figs.push(p.svg_file(
+        &path,
+        &format!("{nights} night(s) in the history; tolerance dashed."),
+    )?);
+    // shear: steady mu of both codes per case (colour per case; native dashed)
+    // entries alternate LIGGGHTS, native
+    let mut data: Vec<CurveData> = Vec::new();
+    for (k, r) in s.shear.iter().enumerate() {
+        for (code, native) in [("LIGGGHTS", false), ("native", true)] {
+            let mut v: Vec<(f64, f64)> = history
+                .iter()
+                .filter(|h| h.kind == "shear" && h.case == r.name)
+                .filter_map(|h| {
+                    let m = if native { h.mu_native } else { h.mu_liggghts };
+                    m.map(|m| (day(h), m))
+                })
+                .collect();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0));
+            data.push((format!("{} {code}", r.name), k, v));
+        }
+    }
+    let curves: Vec<Curve> = data
+        .iter()
+        .enumerate()
+        .map(|(i, (l, k, v))| {
+            let c = Curve::new(l, v, *k);
+            if i % 2 == 1 {
+                c.dashed()
+            } else {
+                c
+            }
+        })
+        .collect();
+    let path = plots.join("trend_shear.svg");
+    line_plot(
+        &path,
+        "shear cases: steady mu per night",
+        "days since the first night in the history",
+        "steady mu",
+        &curves,
+    )?;
+    figs.push(p.svg_file(
+        &path,
+        "Steady μ per night and shear case: LIGGGHTS solid, native dashed, one colour per case.",
+    )?);
+    Ok(figs)
+}

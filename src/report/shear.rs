@@ -1,0 +1,113 @@
+//! The shear study's figures: mu(strain), plate forces, mobilisation, height and rotational
+//! energy, each seed faint with its running mean on top, one legend entry per code.
+
+use crate::error::Result;
+use crate::report::plot::{decimate, line_plot, running_mean, Curve, CurveData};
+use crate::series::Series;
+use std::path::Path;
+
+/// Points per curve in the shear plots.
+const PLOT_POINTS: usize = 1500;
+
+/// Writes the figures of a study's series into `out`.
+pub fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
+    let xy = |s: &Series, x: &str, y: &str| -> Vec<(f64, f64)> {
+        let (cx, cy) = (s.col(x).expect("column"), s.col(y).expect("column"));
+        s.rows.iter().map(|r| (r[cx], r[cy])).collect()
+    };
+    let mut data = Vec::new();
+    for (k, s) in lig.iter().enumerate() {
+        data.push((k, 0usize, s));
+    }
+    for (k, s) in nat.iter().enumerate() {
+        data.push((k, 1usize, s));
+    }
+    for (file, title, x, xd, y, yd) in [
+        (
+            "mu_strain.svg",
+            "friction coefficient mu = Fx / Fy on the top plate",
+            "strain[-]",
+            "shear strain",
+            "mu[-]",
+            "mu",
+        ),
+        (
+            "top_force.svg",
+            "normal force on the top plate",
+            "time[s]",
+            "time [s]",
+            "top_f_y[N]",
+            "Fy [N]",
+        ),
+        (
+            "shear_force.svg",
+            "shear force on the top plate",
+            "strain[-]",
+            "shear strain",
+            "top_f_x[N]",
+            "Fx [N]",
+        ),
+        (
+            "mobilised.svg",
+            "rolling contacts at full mobilisation (native; not in LIGGGHTS' output)",
+            "strain[-]",
+            "shear strain",
+            "mobilised[-]",
+            "fraction of touching pairs",
+        ),
+        (
+            "height.svg",
+            "sample height",
+            "time[s]",
+            "time [s]",
+            "height[m]",
+            "height [m]",
+        ),
+        (
+            "kinetic_energy.svg",
+            "rotational kinetic energy",
+            "time[s]",
+            "time [s]",
+            "erot[J]",
+            "E_rot [J]",
+        ),
+    ] {
+        let pts: Vec<CurveData> = data
+            .iter()
+            .map(|(l, c, s)| {
+                let mut p = xy(s, x, y);
+                if x == "strain[-]" {
+                    p.retain(|q| q.0 > 0.0);
+                }
+                (l.to_string(), *c, p)
+            })
+            .collect();
+        // raw data faint, a running mean (+-10 outputs) per seed on top, one legend entry per code
+        // (decimated to keep the SVGs light: the nightly report inlines them)
+        let means: Vec<Vec<(f64, f64)>> = pts
+            .iter()
+            .map(|(_, _, p)| decimate(&running_mean(p, 10), PLOT_POINTS))
+            .collect();
+        let pts: Vec<CurveData> = pts
+            .into_iter()
+            .map(|(l, c, p)| (l, c, decimate(&p, PLOT_POINTS)))
+            .collect();
+        let mut cs: Vec<Curve> = pts
+            .iter()
+            .map(|(_, c, p)| Curve::new("", p, *c).faint())
+            .collect();
+        for ((seed, c, _), m) in pts.iter().zip(&means) {
+            let label = if seed == "0" {
+                format!(
+                    "{} (running mean, each seed)",
+                    if *c == 0 { "LIGGGHTS" } else { "native" }
+                )
+            } else {
+                String::new()
+            };
+            cs.push(Curve::new(&label, m, *c));
+        }
+        line_plot(&out.join(file), title, xd, yd, &cs)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,407 @@
+//! The sweep's report: the paper's figures (mu against mu_r per speed, mu against speed, heat
+//! maps), its three conclusions checked at the sweep's dt and on converged-dt results, and the
+//! table of points (DIR/report.html, DIR/report.json).
+
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::report::bars::escape;
+use crate::report::html::{table, Page};
+use crate::report::paper::{aggregate, conclusions, heat_map, Conclusion, Point};
+use crate::report::plot::{line_plot, Curve};
+use crate::run::convergence_outcome::{ConvergenceSummary, StudyCode};
+use crate::run::sweep::{collect, Manifest};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+
+/// An owned curve with error bars (one colour per eta_r; LIGGGHTS and converged dt dashed).
+struct ErrCurve {
+    label: String,
+    color: usize,
+    dashed: bool,
+    points: Vec<(f64, f64)>,
+    err: Vec<f64>,
+}
+
+fn err_plot(path: &Path, title: &str, x_desc: &str, data: &[ErrCurve]) -> Result<()> {
+    let curves: Vec<Curve> = data
+        .iter()
+        .map(|d| {
+            let c = Curve::new(&d.label, &d.points, d.color).with_err(&d.err);
+            if d.dashed {
+                c.dashed()
+            } else {
+                c
+            }
+        })
+        .collect();
+    line_plot(path, title, x_desc, "steady mu", &curves)
+}
+
+/// `DIR/report.json`: the aggregated points and the conclusions per code.
+#[derive(Serialize)]
+struct SweepReport {
+    schema: u32,
+    points: Vec<Point>,
+    conclusions: Vec<(String, Vec<Conclusion>)>,
+    converged_points: Vec<Point>,
+    converged_conclusions: Vec<(String, Vec<Conclusion>)>,
+    runs: usize,
+    run_wall_s_liggghts: f64,
+    run_wall_s_native: f64,
+}
+
+/// The smaller-dt points of `dir`: a sweep (manifest.json: every result aggregated) or a
+/// `verify convergence` output (summary.json: native at its finest dt).
+fn converged_points(dir: &Path) -> Result<Vec<Point>> {
+    if dir.join("manifest.json").is_file() {
+        let cm = Manifest::load(&dir.join("manifest.json"))?;
+        return Ok(aggregate(&collect(&cm, dir).0));
+    }
+    let bad = || {
+        Error::invalid(
+            "--converged",
+            dir.display(),
+            "a sweep directory (with manifest.json) or the output directory of `verify \
+             convergence` (with a summary.json naming mu_r and eta_r)",
+        )
+    };
+    let path = dir.join("summary.json");
+    if !path.is_file() {
+        return Err(bad());
+    }
+    let v: ConvergenceSummary = crate::run::load(&path)?;
+    let finest = v
+        .points
+        .iter()
+        .filter(|p| p.code == StudyCode::Native)
+        .min_by(|a, b| a.dt_factor.total_cmp(&b.dt_factor))
+        .ok_or_else(bad)?;
+    Ok(vec![Point {
+        code: "native".into(),
+        mu_r: v.mu_r,
+        eta_r: v.eta_r,
+        stage: v.stage,
+        speed: v.speed,
+        mu: finest.steady.mu,
+        mu_ci95: if finest.steady.mu_ci95.is_finite() {
+            finest.steady.mu_ci95
+        } else {
+            f64::INFINITY
+        },
+        seeds: finest.steady.per_seed_mu.len(),
+        erot: finest.erot,
+        dashpot_stable: finest.stability.stable,
+        stability_s: finest.stability.entries.first().ok_or_else(bad)?.criterion,
+    }])
+}
+
+/// The paper's figures, the conclusions and a report page from DIR's (current) results.
+pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
+    let m = Manifest::load(&dir.join("manifest.json"))?;
+    let (results, missing) = collect(&m, dir);
+    if results.is_empty() {
+        return Err(Error::Cases(format!(
+            "no results in {} yet (run the sweep first)",
+            dir.display()
+        )));
+    }
+    let points = aggregate(&results);
+    let mut conv_points = Vec::new();
+    for c in converged {
+        conv_points.extend(converged_points(c)?);
+    }
+    let codes: Vec<String> = {
+        let mut c: Vec<String> = points.iter().map(|p| p.code.clone()).collect();
+        c.dedup();
+        c
+    };
+    let concl: Vec<(String, Vec<Conclusion>)> = codes
+        .iter()
+        .map(|c| (c.clone(), conclusions(&points, c)))
+        .collect();
+    // the conclusions judged on trustworthy numbers: each point where the explicit dashpot is
+    // stable as it is, each unstable point by its converged-dt result, unstable points
+    // without one left out
+    let judged: Vec<Point> = points
+        .iter()
+        .filter_map(|p| {
+            if p.dashpot_stable {
+                return Some(p.clone());
+            }
+            conv_points
+                .iter()
+                .find(|c| {
+                    c.code == p.code && c.stage == p.stage && c.mu_r == p.mu_r && c.eta_r == p.eta_r
+                })
+                .cloned()
+        })
+        .collect();
+    let conv_concl: Vec<(String, Vec<Conclusion>)> = if conv_points.is_empty() {
+        Vec::new()
+    } else {
+        codes
+            .iter()
+            .filter(|c| judged.iter().any(|p| &p.code == *c))
+            .map(|c| (c.clone(), conclusions(&judged, c)))
+            .collect()
+    };
+    let figs = dir.join("figures");
+    let mut page = Page::new("DEM sweep: the paper's parametric study");
+    page.html("<h1>Parametric study: steady friction over (mu_r, eta_r)</h1>");
+    let wall_l: f64 = results.iter().filter_map(|r| r.liggghts_wall_s).sum();
+    let wall_n: f64 = results.iter().filter_map(|r| r.native_wall_s).sum();
+    let inv: Option<serde_json::Value> = std::fs::read_to_string(dir.join("last_invocation.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok());
+    page.html(&format!(
+        "<p class=\"meta\">{} of {} runs ({} preset, {}, engine {:?}, dt factor {}, created {}). \
+         Run wall time summed over runs: native {:.2} h, LIGGGHTS {:.2} h{}.</p>",
+        results.len(),
+        m.runs.len(),
+        m.base.preset,
+        m.base.rolling,
+        m.base.engine,
+        m.base.protocol.dt_factor,
+        escape(&m.created_utc),
+        wall_n / 3600.0,
+        wall_l / 3600.0,
+        inv.map(|v| format!(
+            "; last local invocation: {:.2} h wall with {} job(s) for {} runs",
+            v["wall_s"].as_f64().unwrap_or(f64::NAN) / 3600.0,
+            v["jobs"],
+            v["runs_run"]
+        ))
+        .unwrap_or_default()
+    ));
+    if !missing.is_empty() {
+        page.html(&format!(
+            "<p class=\"warn\">{} runs have no result yet: the figures show what exists.</p>",
+            missing.len()
+        ));
+    }
+    page.heading("conclusions", "The paper's conclusions, checked");
+    for (title, set) in [
+        ("at the sweep's dt", &concl),
+        (
+            "on stable or converged-dt results: unstable points replaced by their converged \
+             result, those without one left out",
+            &conv_concl,
+        ),
+    ] {
+        for (code, cs) in set.iter() {
+            let rows: Vec<Vec<(String, &str)>> = cs
+                .iter()
+                .map(|c| {
+                    vec![
+                        (escape(&c.claim), ""),
+                        (
+                            escape(&c.verdict),
+                            match c.verdict.as_str() {
+                                "agrees" => "pass",
+                                "not assessable" | "not resolved" | "partly agrees" => "warn",
+                                _ => "fail",
+                            },
+                        ),
+                        (escape(&c.evidence), ""),
+                    ]
+                })
+                .collect();
+            page.html(&format!("<h3>{} ({title})</h3>", escape(code)));
+            page.html(&table(&["paper's claim", "our result", "evidence"], &rows));
+            for c in cs.iter().filter(|c| c.verdict != "agrees") {
+                page.para(&format!(
+                    "Where we differ from the paper ({code}, {title}): \"{}\" {} — {}.",
+                    c.claim, c.verdict, c.evidence
+                ));
+            }
+        }
+    }
+    let unstable: Vec<String> = points
+        .iter()
+        .filter(|p| !p.dashpot_stable && p.stage == 0)
+        .map(|p| format!("(mu_r {}, eta_r {})", p.mu_r, p.eta_r))
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    if !unstable.is_empty() {
+        page.para(&format!(
+            "The explicit rolling dashpot is expected to be unstable at this dt at {} point(s): {}. \
+             Results there may show the numerical artefact (spurious rotational energy, low mu); \
+             judge them on converged-dt results: a sweep at `--dt-factor 0.25` or `verify \
+             convergence` studies of single points, passed as `verify sweep report DIR --converged \
+             DIR2 [--converged DIR3 ...]`.",
+            unstable.len(),
+            unstable.join(", ")
+        ));
+    }
+    page.heading("figures", "Figures");
+    let mut fig_html = Vec::new();
+    let stages: Vec<(usize, f64)> = {
+        let mut s: Vec<(usize, f64)> = points.iter().map(|p| (p.stage, p.speed)).collect();
+        s.sort_by_key(|a| a.0);
+        s.dedup();
+        s
+    };
+    let mut etas: Vec<f64> = points.iter().map(|p| p.eta_r).collect();
+    etas.sort_by(f64::total_cmp);
+    etas.dedup();
+    let mut mus: Vec<f64> = points.iter().map(|p| p.mu_r).collect();
+    mus.sort_by(f64::total_cmp);
+    mus.dedup();
+    // mu against mu_r, one curve per eta_r and code, one panel per speed (paper Figs 5-7)
+    for &(k, speed) in &stages {
+        let mut data: Vec<ErrCurve> = Vec::new();
+        for (ci, &e) in etas.iter().enumerate() {
+            for (set, tag) in [(&points, ""), (&conv_points, " converged dt")] {
+                for code in &codes {
+                    let sel: Vec<&Point> = set
+                        .iter()
+                        .filter(|p| &p.code == code && p.stage == k && p.eta_r == e)
+                        .collect();
+                    if sel.is_empty() {
+                        continue;
+                    }
+                    data.push(ErrCurve {
+                        label: format!("eta_r {e} {code}{tag}"),
+                        color: ci,
+                        dashed: code == "liggghts" || !tag.is_empty(),
+                        points: sel.iter().map(|p| (p.mu_r, p.mu)).collect(),
+                        err: sel.iter().map(|p| p.mu_ci95).collect(),
+                    });
+                }
+            }
+        }
+        let path = figs.join(format!("mu_vs_mur_stage{k}.svg"));
+        err_plot(
+            &path,
+            &format!("steady mu against mu_r, shear speed {speed} m/s"),
+            "mu_r",
+            &data,
+        )?;
+        fig_html.push(page.svg_file(
+            &path,
+            &format!("Steady μ against μr at {speed} m/s, one curve per ηr (95 % CI bars; LIGGGHTS and converged-dt results dashed)."),
+        )?);
+    }
+    // mu against speed, one panel per mu_r (paper Figs 12-15)
+    if stages.len() > 1 {
+        for &m_r in &mus {
+            let mut data: Vec<ErrCurve> = Vec::new();
+            for (ci, &e) in etas.iter().enumerate() {
+                for code in &codes {
+                    let sel: Vec<&Point> = points
+                        .iter()
+                        .filter(|p| &p.code == code && p.mu_r == m_r && p.eta_r == e)
+                        .collect();
+                    if !sel.is_empty() {
+                        data.push(ErrCurve {
+                            label: format!("eta_r {e} {code}"),
+                            color: ci,
+                            dashed: code == "liggghts",
+                            points: sel.iter().map(|p| (p.speed, p.mu)).collect(),
+                            err: sel.iter().map(|p| p.mu_ci95).collect(),
+                        });
+                    }
+                }
+            }
+            let path = figs.join(format!("mu_vs_speed_mur{m_r}.svg"));
+            err_plot(
+                &path,
+                &format!("steady mu against shear speed, mu_r {m_r}"),
+                "shear speed [m/s]",
+                &data,
+            )?;
+            fig_html.push(page.svg_file(&path, &format!("Steady μ against speed at μr = {m_r}."))?);
+        }
+    }
+    // heat maps
+    for code in &codes {
+        for &(k, speed) in &stages {
+            for (set, tag) in [(&points, ""), (&conv_points, "_converged")] {
+                let sel: Vec<&Point> = set
+                    .iter()
+                    .filter(|p| &p.code == code && p.stage == k)
+                    .collect();
+                if sel.is_empty() {
+                    continue;
+                }
+                let svg = heat_map(
+                    &format!(
+                        "steady mu, {code}, {speed} m/s{}",
+                        if tag.is_empty() { "" } else { ", converged dt" }
+                    ),
+                    &sel,
+                );
+                write_atomic(
+                    &figs.join(format!("heat_{code}_stage{k}{tag}.svg")),
+                    svg.as_bytes(),
+                )?;
+                fig_html.push(page.svg(&svg, &format!("Steady μ over (μr, ηr), {code}.")));
+            }
+        }
+    }
+    page.figures(&fig_html);
+    page.heading("table", "Points");
+    let rows: Vec<Vec<(String, &str)>> = points
+        .iter()
+        .map(|p| {
+            let conv = conv_points
+                .iter()
+                .find(|q| {
+                    q.code == p.code && q.stage == p.stage && q.mu_r == p.mu_r && q.eta_r == p.eta_r
+                })
+                .map(|q| format!("{:.4} ± {:.4}", q.mu, q.mu_ci95))
+                .unwrap_or("–".into());
+            vec![
+                (p.code.clone(), ""),
+                (format!("{}", p.speed), "num"),
+                (format!("{}", p.mu_r), "num"),
+                (format!("{}", p.eta_r), "num"),
+                (format!("{:.4} ± {:.4}", p.mu, p.mu_ci95), "num"),
+                (p.seeds.to_string(), "num"),
+                (format!("{:.2e}", p.erot), "num"),
+                (
+                    format!("{:.2}", p.stability_s),
+                    if p.dashpot_stable { "pass" } else { "warn" },
+                ),
+                (conv, "num"),
+            ]
+        })
+        .collect();
+    page.html(&table(
+        &[
+            "code",
+            "speed [m/s]",
+            "mu_r",
+            "eta_r",
+            "steady mu (95 % CI)",
+            "seeds",
+            "E_rot [J]",
+            "stability S (unstable ≥ 4)",
+            "converged dt mu",
+        ],
+        &rows,
+    ));
+    write_atomic(&dir.join("report.html"), page.finish().as_bytes())?;
+    let rep = SweepReport {
+        schema: crate::run::SCHEMA,
+        points,
+        conclusions: concl,
+        converged_points: conv_points,
+        converged_conclusions: conv_concl,
+        runs: results.len(),
+        run_wall_s_liggghts: wall_l,
+        run_wall_s_native: wall_n,
+    };
+    write_atomic(
+        &dir.join("report.json"),
+        serde_json::to_string_pretty(&rep)?.as_bytes(),
+    )?;
+    for (code, cs) in rep.conclusions.iter().chain(&rep.converged_conclusions) {
+        for c in cs {
+            println!("  {code}: {} -> {} ({})", c.claim, c.verdict, c.evidence);
+        }
+    }
+    println!("report: {}", dir.join("report.html").display());
+    Ok(())
+}

@@ -1,0 +1,145 @@
+//! The run layer: one request and one typed outcome per study (contact, shear, convergence,
+//! sweep, nightly, replay, bench). Commands build requests from their arguments and print
+//! outcomes; sweep, nightly and convergence build requests of the studies they are made of and
+//! use those outcomes in memory. Nothing here imports a command module.
+//!
+//! Data flows one way: request -> case (built once, by the spec layer) -> {deck + LIGGGHTS run,
+//! native run} -> series -> comparison (one agreement rule, [`crate::compare`]) -> outcome.
+
+pub mod bench;
+pub mod contact;
+pub mod convergence;
+pub mod convergence_outcome;
+pub mod nightly;
+pub mod nightly_outcome;
+pub mod replay;
+pub mod shear;
+pub mod sweep;
+
+use crate::error::{Error, Result};
+use crate::liggghts::Liggghts;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Version of the outcome and summary files (`summary.json`, `outcome.json`) written by the run
+/// layer; readers refuse other versions.
+pub const SCHEMA: u32 = 1;
+
+/// What a study concluded (a command's exit status: 0 agree, 1 disagree).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Verdict {
+    Agree,
+    Disagree,
+}
+
+impl Verdict {
+    pub fn from_pass(pass: bool) -> Self {
+        if pass {
+            Verdict::Agree
+        } else {
+            Verdict::Disagree
+        }
+    }
+}
+
+/// Which codes a study runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Engine {
+    Native,
+    Liggghts,
+    Both,
+}
+
+impl Engine {
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "native" => Ok(Engine::Native),
+            "liggghts" => Ok(Engine::Liggghts),
+            "both" => Ok(Engine::Both),
+            _ => Err(Error::Unknown {
+                what: "engine",
+                name: s.into(),
+                valid: "native, liggghts, both".into(),
+            }),
+        }
+    }
+    pub fn runs_native(self) -> bool {
+        self != Engine::Liggghts
+    }
+    pub fn runs_liggghts(self) -> bool {
+        self != Engine::Native
+    }
+    /// CPU cores one run occupies (both codes run side by side).
+    pub fn cores(self) -> usize {
+        if self == Engine::Both {
+            2
+        } else {
+            1
+        }
+    }
+}
+
+/// Where LIGGGHTS is and how long one of its runs may take.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LiggghtsRequest {
+    /// The binary (default: `liggghts` on the PATH).
+    pub binary: Option<PathBuf>,
+    /// Timeout of one run [s].
+    pub timeout_s: u64,
+}
+
+/// Default timeout of one LIGGGHTS run of a two-body contact case [s] (they take seconds).
+pub const CONTACT_TIMEOUT_S: u64 = 600;
+/// Default timeout of one LIGGGHTS shear-box run [s] (a paper-preset seed takes days).
+pub const SHEAR_TIMEOUT_S: u64 = 7 * 24 * 3600;
+
+impl LiggghtsRequest {
+    /// Locates the binary (the one place the crate does): an error naming the install command
+    /// when it is missing.
+    pub fn locate(&self) -> Result<Liggghts> {
+        Liggghts::locate(self.binary.as_deref(), Duration::from_secs(self.timeout_s))
+    }
+}
+
+/// The default output directory of a study: `runs/<prefix>-<UTC stamp>`.
+pub fn default_out(prefix: &str) -> PathBuf {
+    PathBuf::from("runs").join(format!("{prefix}-{}", utc_stamp()))
+}
+
+/// The output directory asked for, or the study's default.
+pub fn out_or_default(out: Option<&Path>, prefix: &str) -> PathBuf {
+    out.map(Path::to_path_buf)
+        .unwrap_or_else(|| default_out(prefix))
+}
+
+/// `YYYYmmdd-HHMMSS` in UTC.
+pub fn utc_stamp() -> String {
+    jiff::Timestamp::now().strftime("%Y%m%d-%H%M%S").to_string()
+}
+
+/// An outcome stored with a schema version.
+pub trait Versioned: serde::de::DeserializeOwned {
+    fn schema(&self) -> u32;
+}
+
+/// Reads a stored outcome (`summary.json`, `bench.json`), refusing other schema versions.
+pub fn load<T: Versioned>(path: &Path) -> Result<T> {
+    let v: T = serde_json::from_str(&crate::fsutil::read_to_string(path)?).map_err(|source| {
+        Error::JsonFile {
+            path: path.to_path_buf(),
+            line: None,
+            source,
+        }
+    })?;
+    if v.schema() != SCHEMA {
+        return Err(Error::invalid(
+            format!("schema of {}", path.display()),
+            v.schema(),
+            SCHEMA.to_string(),
+        ));
+    }
+    Ok(v)
+}

@@ -1,0 +1,193 @@
+//! Particle-plate contacts of one particle per step, as fix_wall_gran.cpp `post_force_mesh`
+//! with fix_contact_history_mesh does them: per mesh (bottom, then top) mark the particle's
+//! contact records, test its candidate triangles (plane, then the barycentric
+//! `resolveTriSphereContactBary`), keep or create a record (`handleContact`: a face contact
+//! coplanar with a kept one is skipped, a new face record inherits a coplanar neighbour's
+//! history), evaluate the contact, and drop the unmarked records (`cleanUpContacts`).
+//! `RUST_LOG=trace` prints every particle-triangle contact.
+
+use super::implicit::add_dashpot;
+use super::{image_shift, WallSlots, MAX_WALL_CONTACTS};
+use crate::solver::contact::{surfaces_intersect, ContactData};
+use crate::solver::material::PairParams;
+use crate::solver::trimesh::{TriContactRecord, TriMesh};
+use crate::solver::vec3::V3;
+
+/// What the plate contacts of every particle share in one force evaluation.
+pub(super) struct WallContext<'a> {
+    pub params: &'a PairParams,
+    pub meshes: &'a [TriMesh; 2],
+    /// Candidate (mesh, triangle, image) per particle, CSR.
+    pub cand: &'a [(u8, u32, u8)],
+    pub cstart: &'a [u32],
+    pub lx: f64,
+    pub lz: f64,
+    /// Node velocity of each mesh.
+    pub vnode: [V3; 2],
+    pub x: &'a [V3],
+    pub v: &'a [V3],
+    pub omega: &'a [V3],
+    pub radius: &'a [f64],
+    pub mass: &'a [f64],
+    pub implicit: bool,
+    pub torsion: bool,
+    pub update_history: bool,
+    /// Log every contact (`RUST_LOG=trace`; read once per evaluation, not per contact).
+    pub trace: bool,
+}
+
+impl WallContext<'_> {
+    /// Adds particle `q`'s plate contacts to its force `f`, torque `t`, its contributions to
+    /// the plate forces `wf` (bottom, top) and its implicit dashpot system `imp`. False when
+    /// the particle would hold more than [`MAX_WALL_CONTACTS`] records.
+    pub fn particle(
+        &self,
+        q: usize,
+        slots: &mut WallSlots,
+        f: &mut V3,
+        t: &mut V3,
+        wf: &mut (V3, V3),
+        imp: &mut ([f64; 6], V3),
+    ) -> bool {
+        let WallContext {
+            params,
+            meshes,
+            cand,
+            cstart,
+            lx,
+            lz,
+            vnode,
+            x,
+            v,
+            omega,
+            radius,
+            mass,
+            implicit,
+            torsion,
+            update_history,
+            trace,
+        } = *self;
+        *wf = ([0.0; 3], [0.0; 3]);
+        for m in 0..2u8 {
+            // markAllContacts of this mesh
+            for r in &mut slots.rec[..slots.n as usize] {
+                if r.mesh == m {
+                    r.keep = false;
+                }
+            }
+            let mesh = &meshes[m as usize];
+            for &(cm, tri, img) in &cand[cstart[q] as usize..cstart[q + 1] as usize] {
+                if cm != m {
+                    continue;
+                }
+                let shift = image_shift(img, lx, lz);
+                if mesh.beyond_plane(tri as usize, shift, x[q], radius[q]) {
+                    continue;
+                }
+                let Some(hit) = mesh.resolve(tri as usize, shift, x[q]) else {
+                    continue;
+                };
+                let deltan = hit.d - radius[q];
+                if deltan > 0.0 {
+                    continue;
+                }
+                // handleContact
+                let n = slots.n as usize;
+                let slot = match (0..n).find(|&i| slots.rec[i].mesh == m && slots.rec[i].tri == tri)
+                {
+                    Some(i) => {
+                        slots.rec[i].keep = true;
+                        i
+                    }
+                    None => {
+                        let cop = &mesh.coplanar[tri as usize];
+                        if hit.face
+                            && (0..n).any(|i| {
+                                slots.rec[i].mesh == m
+                                    && slots.rec[i].keep
+                                    && cop.contains(&slots.rec[i].tri)
+                            })
+                        {
+                            continue;
+                        }
+                        if n == MAX_WALL_CONTACTS {
+                            return false;
+                        }
+                        let mut rec = TriContactRecord {
+                            mesh: m,
+                            tri,
+                            keep: true,
+                            ..Default::default()
+                        };
+                        if hit.face {
+                            for i in 0..n {
+                                if slots.rec[i].mesh == m && cop.contains(&slots.rec[i].tri) {
+                                    rec.hist = slots.rec[i].hist;
+                                }
+                            }
+                        }
+                        slots.rec[n] = rec;
+                        slots.n += 1;
+                        n
+                    }
+                };
+                let vn = vnode[m as usize];
+                let b = hit.bary;
+                let vw = [
+                    b[0] * vn[0] + b[1] * vn[0] + b[2] * vn[0],
+                    b[0] * vn[1] + b[1] * vn[1] + b[2] * vn[1],
+                    b[0] * vn[2] + b[1] * vn[2] + b[2] * vn[2],
+                ];
+                let mut cd =
+                    ContactData::wall(radius[q], mass[q], hit.delta, deltan, v[q], vw, omega[q]);
+                if trace {
+                    eprintln!(
+                        "wall p {} mesh {m} tri {tri} img {img} face {} d {:e} cp {:e} {:e} {:e}",
+                        q + 1,
+                        hit.face,
+                        hit.d,
+                        x[q][0] + hit.delta[0],
+                        x[q][1] + hit.delta[1],
+                        x[q][2] + hit.delta[2]
+                    );
+                }
+                let mut hist = slots.rec[slot].hist;
+                let (fi, _, o) = surfaces_intersect(&mut cd, params, &mut hist, update_history);
+                if implicit && o.implicit_damping != 0.0 {
+                    // walls do not rotate; the dashpot acts on wr = cr omega_i / r
+                    add_dashpot(
+                        imp,
+                        o.implicit_damping * cd.cri * cd.rinv,
+                        cd.en,
+                        torsion,
+                        [0.0; 3],
+                    );
+                }
+                slots.rec[slot].hist = hist;
+                slots.rec[slot].force = fi.delta_f;
+                slots.rec[slot].torque = fi.delta_torque;
+                slots.rec[slot].face = hit.face;
+                let before = *f;
+                for c in 0..3 {
+                    f[c] += fi.delta_f[c];
+                    t[c] += fi.delta_torque[c];
+                }
+                let dest = if m == 1 { &mut wf.1 } else { &mut wf.0 };
+                for c in 0..3 {
+                    dest[c] += -(f[c] - before[c]);
+                }
+            }
+            // cleanUpContacts of this mesh
+            let mut k = 0;
+            for i in 0..slots.n as usize {
+                let r = slots.rec[i];
+                if r.mesh != m || r.keep {
+                    slots.rec[k] = r;
+                    k += 1;
+                }
+            }
+            slots.n = k as u8;
+        }
+        true
+    }
+}
