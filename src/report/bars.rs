@@ -1,7 +1,9 @@
 //! Grouped bar chart with 95 % confidence-interval whiskers, as a standalone SVG (steady mu of
-//! both codes per shear case). Written by hand: plotters has no grouped bars with error bars.
+//! both codes per shear case), drawn with plotters' primitives (rectangles, paths, text).
 
-use std::fmt::Write;
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// One bar: value, CI half-width (drawn when finite), colour index (0 LIGGGHTS, 1 native).
 pub struct Bar {
@@ -16,8 +18,6 @@ pub struct BarGroup {
     pub bars: Vec<Bar>,
 }
 
-const COLORS: [&str; 2] = ["#1f77b4", "#ff7f0e"];
-
 /// Escapes text for XML/HTML.
 pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -26,10 +26,21 @@ pub fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// The chart as an SVG document; `legend` names the colours.
-pub fn bar_chart(title: &str, y_desc: &str, groups: &[BarGroup], legend: &[&str]) -> String {
-    let (w, h) = (900.0, 420.0);
-    let (left, right, top, bottom) = (70.0, 20.0, 40.0, 90.0);
+/// LIGGGHTS blue, native orange (as the line plots).
+const COLORS: [RGBColor; 2] = [RGBColor(31, 119, 180), RGBColor(255, 127, 14)];
+
+/// A drawing error of an in-memory SVG.
+pub(crate) fn draw_err(e: impl std::fmt::Display) -> Error {
+    Error::io("(SVG in memory)", std::io::Error::other(e.to_string()))
+}
+
+/// The chart as an SVG document (plotters); `legend` names the colours.
+pub fn bar_chart(
+    title: &str,
+    y_desc: &str,
+    groups: &[BarGroup],
+    legend: &[&str],
+) -> Result<String> {
     let top_value = groups
         .iter()
         .flat_map(|g| &g.bars)
@@ -41,90 +52,83 @@ pub fn bar_chart(title: &str, y_desc: &str, groups: &[BarGroup], legend: &[&str]
     } else {
         1.0
     };
-    let y = |v: f64| top + (h - top - bottom) * (1.0 - v.clamp(0.0, ymax) / ymax);
+    let n = groups.len().max(1) as f64;
     let mut s = String::new();
-    let _ = write!(
-        s,
-        r#"<svg width="{w}" height="{h}" viewBox="0 0 {w} {h}" xmlns="http://www.w3.org/2000/svg"><rect width="{w}" height="{h}" fill="white"/><text x="{}" y="24" font-family="sans-serif" font-size="18" text-anchor="middle">{}</text>"#,
-        w / 2.0,
-        escape(title)
-    );
-    for k in 0..=5 {
-        let v = ymax * k as f64 / 5.0;
-        let _ = write!(
-            s,
-            r##"<line x1="{left}" x2="{}" y1="{yy:.1}" y2="{yy:.1}" stroke="#ddd"/><text x="{}" y="{:.1}" font-family="sans-serif" font-size="12" text-anchor="end">{v:.2}</text>"##,
-            w - right,
-            left - 6.0,
-            y(v) + 4.0,
-            yy = y(v)
-        );
-    }
-    let _ = write!(
-        s,
-        r#"<text transform="translate(18 {}) rotate(-90)" font-family="sans-serif" font-size="13" text-anchor="middle">{}</text>"#,
-        (top + h - bottom) / 2.0,
-        escape(y_desc)
-    );
-    let gw = (w - left - right) / groups.len().max(1) as f64;
-    for (i, g) in groups.iter().enumerate() {
-        let x0 = left + gw * i as f64;
-        let bw = gw * 0.7 / g.bars.len().max(1) as f64;
-        for (j, b) in g.bars.iter().enumerate() {
-            let x = x0 + gw * 0.15 + bw * j as f64;
-            let color = COLORS[b.color % COLORS.len()];
-            if b.value.is_finite() {
-                let _ = write!(
-                    s,
-                    r#"<rect x="{x:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{color}"><title>{:.4} ± {:.4}</title></rect>"#,
-                    y(b.value),
-                    bw * 0.9,
-                    y(0.0) - y(b.value),
-                    b.value,
-                    b.ci95
-                );
+    {
+        let root = SVGBackend::with_string(&mut s, (900, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 18))
+            .margin(10)
+            .margin_top(30)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..n, 0.0..ymax)
+            .map_err(draw_err)?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .y_desc(y_desc)
+            .y_label_formatter(&|v| format!("{v:.2}"))
+            .draw()
+            .map_err(draw_err)?;
+        let whisker = BLACK.stroke_width(2);
+        for (i, g) in groups.iter().enumerate() {
+            let bw = 0.7 / g.bars.len().max(1) as f64;
+            for (j, b) in g.bars.iter().enumerate() {
+                if !b.value.is_finite() {
+                    continue;
+                }
+                let x = i as f64 + 0.15 + bw * j as f64;
+                let color = COLORS[b.color % COLORS.len()];
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x, 0.0), (x + 0.9 * bw, b.value.clamp(0.0, ymax))],
+                        color.filled(),
+                    )))
+                    .map_err(draw_err)?;
                 if b.ci95.is_finite() {
-                    let cx = x + bw * 0.45;
-                    let (lo, hi) = (y(b.value - b.ci95), y(b.value + b.ci95));
-                    let _ = write!(
-                        s,
-                        r#"<path d="M{cx:.1} {lo:.1}V{hi:.1}M{:.1} {lo:.1}h{:.1}M{:.1} {hi:.1}h{:.1}" stroke="black" stroke-width="1.5"/>"#,
-                        cx - 5.0,
-                        10.0,
-                        cx - 5.0,
-                        10.0
-                    );
+                    let cx = x + 0.45 * bw;
+                    let (lo, hi) = ((b.value - b.ci95).max(0.0), (b.value + b.ci95).min(ymax));
+                    let w = 0.1 * bw;
+                    chart
+                        .draw_series([
+                            PathElement::new(vec![(cx, lo), (cx, hi)], whisker),
+                            PathElement::new(vec![(cx - w, lo), (cx + w, lo)], whisker),
+                            PathElement::new(vec![(cx - w, hi), (cx + w, hi)], whisker),
+                        ])
+                        .map_err(draw_err)?;
                 }
             }
+            let (px, py) = chart.backend_coord(&(i as f64 + 0.5, 0.0));
+            root.draw(&Text::new(
+                g.label.clone(),
+                (px, py + 8),
+                ("sans-serif", 12)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Center, VPos::Top)),
+            ))
+            .map_err(draw_err)?;
         }
-        let _ = write!(
-            s,
-            r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="12" text-anchor="middle">{}</text>"#,
-            x0 + gw / 2.0,
-            h - bottom + 18.0,
-            escape(&g.label)
-        );
+        for (k, name) in legend.iter().enumerate() {
+            let x = 80 + 170 * k as i32;
+            root.draw(&Rectangle::new(
+                [(x, 34), (x + 14, 48)],
+                COLORS[k % COLORS.len()].filled(),
+            ))
+            .map_err(draw_err)?;
+            root.draw(&Text::new(
+                name.to_string(),
+                (x + 20, 34),
+                ("sans-serif", 13),
+            ))
+            .map_err(draw_err)?;
+        }
+        root.present().map_err(draw_err)?;
     }
-    let _ = write!(
-        s,
-        r#"<line x1="{left}" x2="{}" y1="{b:.1}" y2="{b:.1}" stroke="black"/>"#,
-        w - right,
-        b = y(0.0)
-    );
-    for (k, name) in legend.iter().enumerate() {
-        let x = left + 10.0 + 170.0 * k as f64;
-        let _ = write!(
-            s,
-            r#"<rect x="{x}" y="{}" width="14" height="14" fill="{}"/><text x="{}" y="{}" font-family="sans-serif" font-size="13">{}</text>"#,
-            h - 40.0,
-            COLORS[k % COLORS.len()],
-            x + 20.0,
-            h - 28.0,
-            escape(name)
-        );
-    }
-    s += "</svg>";
-    s
+    Ok(s)
 }
 
 #[cfg(test)]
@@ -148,10 +152,19 @@ mod tests {
                 },
             ],
         }];
-        let s = bar_chart("mu", "mu", &g, &["LIGGGHTS", "native"]);
-        assert!(s.starts_with("<svg") && s.ends_with("</svg>"));
-        assert_eq!(s.matches("<rect x=").count(), 4); // 2 bars + 2 legend boxes
-        assert_eq!(s.matches("stroke-width=\"1.5\"").count(), 1); // one finite CI
-        assert!(s.contains("a&lt;b"));
+        let s = bar_chart("mu", "mu", &g, &["LIGGGHTS", "native"]).unwrap();
+        assert!(
+            s.starts_with("<svg") && s.trim_end().ends_with("</svg>"),
+            "{s}"
+        );
+        // 2 bars and 2 legend boxes in the codes' colours
+        assert_eq!(s.matches("fill=\"#1F77B4\"").count(), 2, "{s}");
+        assert_eq!(s.matches("fill=\"#FF7F0E\"").count(), 2, "{s}");
+        // one finite CI: its three whisker strokes
+        assert_eq!(s.matches("stroke-width=\"2\"").count(), 3, "{s}");
+        assert!(
+            s.contains("\na&lt;b\n") && s.contains("\nLIGGGHTS\n"),
+            "{s}"
+        );
     }
 }

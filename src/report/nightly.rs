@@ -198,7 +198,7 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         "mu",
         &groups,
         &["LIGGGHTS", "native"],
-    );
+    )?;
     write_atomic(&plots.join("steady_mu.svg"), bars.as_bytes())?;
     let fig = p.svg(
         &bars,

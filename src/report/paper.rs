@@ -3,10 +3,12 @@
 //! (Figs 12-15), a heat map over (mu_r, eta_r), and the three conclusions checked in numbers.
 
 use crate::compare::{mean_ci95, within_cis};
-use crate::report::bars::escape;
+use crate::error::Result;
+use crate::report::bars::draw_err;
 use crate::run::sweep::RunResult;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::Serialize;
-use std::fmt::Write;
 
 /// Mean over seeds of one code at one (mu_r, eta_r, stage).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -320,8 +322,10 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
     out
 }
 
-/// Heat map of mu over (mu_r, eta_r) for one code and stage; unstable points are marked.
-pub fn heat_map(title: &str, points: &[&Point]) -> String {
+/// Heat map of mu over (mu_r, eta_r) for one code and stage, as an SVG document (plotters):
+/// one cell per point, light yellow (low mu) to dark blue (high mu), its mu written in it;
+/// points where the explicit dashpot is unstable get a red frame and a dagger.
+pub fn heat_map(title: &str, points: &[&Point]) -> Result<String> {
     let mut mus: Vec<f64> = points.iter().map(|p| p.mu_r).collect();
     mus.sort_by(f64::total_cmp);
     mus.dedup();
@@ -334,74 +338,97 @@ pub fn heat_map(title: &str, points: &[&Point]) -> String {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
             (a.min(p.mu), b.max(p.mu))
         });
-    let (cw, ch) = (110.0, 60.0);
-    let (left, top) = (90.0, 50.0);
-    let w = left + cw * mus.len() as f64 + 30.0;
-    let h = top + ch * etas.len() as f64 + 90.0;
-    let mut s = String::new();
-    let _ = write!(
-        s,
-        r#"<svg width="{w}" height="{h}" viewBox="0 0 {w} {h}" xmlns="http://www.w3.org/2000/svg"><rect width="{w}" height="{h}" fill="white"/><text x="{}" y="24" font-family="sans-serif" font-size="16" text-anchor="middle">{}</text>"#,
-        w / 2.0,
-        escape(title)
-    );
     // colour: light yellow (low mu) to dark blue (high mu)
     let color = |v: f64| {
         let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
         let lerp = |a: f64, b: f64| (a + (b - a) * t).round() as u8;
-        (lerp(255.0, 8.0), lerp(247.0, 48.0), lerp(188.0, 107.0), t)
+        (
+            RGBColor(lerp(255.0, 8.0), lerp(247.0, 48.0), lerp(188.0, 107.0)),
+            t,
+        )
     };
-    for (i, m) in mus.iter().enumerate() {
-        let _ = write!(
-            s,
-            r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="13" text-anchor="middle">{m}</text>"#,
-            left + cw * (i as f64 + 0.5),
-            top + ch * etas.len() as f64 + 18.0
-        );
-    }
-    let _ = write!(
-        s,
-        r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="13" text-anchor="middle">mu_r</text>"#,
-        left + cw * mus.len() as f64 / 2.0,
-        top + ch * etas.len() as f64 + 38.0
-    );
-    for (j, e) in etas.iter().enumerate() {
-        // eta_r grows upwards
-        let y = top + ch * (etas.len() - 1 - j) as f64;
-        let _ = write!(
-            s,
-            r#"<text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="13" text-anchor="end">eta_r {e}</text>"#,
-            left - 8.0,
-            y + ch / 2.0 + 4.0
-        );
-        for (i, m) in mus.iter().enumerate() {
-            let x = left + cw * i as f64;
-            let Some(p) = points.iter().find(|p| p.mu_r == *m && p.eta_r == *e) else {
-                continue;
-            };
-            let (r, g, b, t) = color(p.mu);
-            let ink = if t > 0.55 { "white" } else { "black" };
-            let _ = write!(
-                s,
-                r##"<rect x="{x:.1}" y="{y:.1}" width="{cw}" height="{ch}" fill="rgb({r},{g},{b})" stroke="{}" stroke-width="{}"><title>mu_r {m}, eta_r {e}: mu {:.4} ± {:.4}, S = {:.1}</title></rect><text x="{:.1}" y="{:.1}" font-family="sans-serif" font-size="14" text-anchor="middle" fill="{ink}">{:.3}{}</text>"##,
-                if p.dashpot_stable { "#fff" } else { "#d62728" },
-                if p.dashpot_stable { 1 } else { 3 },
-                p.mu,
-                p.mu_ci95,
-                p.stability_s,
-                x + cw / 2.0,
-                y + ch / 2.0 + 5.0,
-                p.mu,
-                if p.dashpot_stable { "" } else { " †" }
-            );
+    let (cw, ch) = (110u32, 60u32);
+    let w = 120 + cw * mus.len() as u32 + 30;
+    let h = 60 + ch * etas.len() as u32 + 110;
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 16))
+            .margin(10)
+            .margin_bottom(40)
+            .x_label_area_size(45)
+            .y_label_area_size(90)
+            .build_cartesian_2d(0.0..mus.len() as f64, 0.0..etas.len() as f64)
+            .map_err(draw_err)?;
+        let (mus_l, etas_l) = (mus.clone(), etas.clone());
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_labels(mus.len() * 2 + 1)
+            .y_labels(etas.len() * 2 + 1)
+            .x_desc("mu_r")
+            .y_desc("eta_r")
+            // labels at the cell centres only
+            .x_label_formatter(&move |v| {
+                let k = v - 0.5;
+                (k >= 0.0 && k.fract() == 0.0)
+                    .then(|| mus_l.get(k as usize).map(|m| m.to_string()))
+                    .flatten()
+                    .unwrap_or_default()
+            })
+            .y_label_formatter(&move |v| {
+                let k = v - 0.5;
+                (k >= 0.0 && k.fract() == 0.0)
+                    .then(|| etas_l.get(k as usize).map(|e| e.to_string()))
+                    .flatten()
+                    .unwrap_or_default()
+            })
+            .draw()
+            .map_err(draw_err)?;
+        for (j, e) in etas.iter().enumerate() {
+            for (i, m) in mus.iter().enumerate() {
+                let Some(p) = points.iter().find(|p| p.mu_r == *m && p.eta_r == *e) else {
+                    continue;
+                };
+                let (fill, t) = color(p.mu);
+                let (x, y) = (i as f64, j as f64);
+                let cell = [(x, y), (x + 1.0, y + 1.0)];
+                chart
+                    .draw_series([Rectangle::new(cell, fill.filled())])
+                    .map_err(draw_err)?;
+                let frame = if p.dashpot_stable {
+                    WHITE.stroke_width(1)
+                } else {
+                    RED.stroke_width(3)
+                };
+                chart
+                    .draw_series([Rectangle::new(cell, frame)])
+                    .map_err(draw_err)?;
+                let ink = if t > 0.55 { WHITE } else { BLACK };
+                let label = format!("{:.3}{}", p.mu, if p.dashpot_stable { "" } else { " †" });
+                let (px, py) = chart.backend_coord(&(x + 0.5, y + 0.5));
+                root.draw(&Text::new(
+                    label,
+                    (px, py),
+                    ("sans-serif", 14)
+                        .into_font()
+                        .color(&ink)
+                        .pos(Pos::new(HPos::Center, VPos::Center)),
+                ))
+                .map_err(draw_err)?;
+            }
         }
+        root.draw(&Text::new(
+            "† red frame: explicit rolling dashpot unstable at this dt (S ≥ 4)",
+            (20, h as i32 - 18),
+            ("sans-serif", 12),
+        ))
+        .map_err(draw_err)?;
+        root.present().map_err(draw_err)?;
     }
-    let _ = write!(
-        s,
-        r#"<text x="{left}" y="{:.1}" font-family="sans-serif" font-size="12">† red frame: explicit rolling dashpot unstable at this dt (S ≥ 4)</text>"#,
-        h - 14.0
-    );
-    s + "</svg>"
+    Ok(s)
 }
 
 #[cfg(test)]
@@ -514,8 +541,16 @@ mod tests {
                 .iter()
                 .filter(|p| p.stage == 0)
                 .collect::<Vec<_>>(),
+        )
+        .unwrap();
+        // 6 points (3 mu_r x 2 eta_r): a filled cell and a frame each, on the background;
+        // mu_r 1 (unstable) framed red, its values marked with a dagger
+        assert_eq!(h.matches("<rect").count(), 1 + 12, "{h}");
+        assert_eq!(
+            h.matches("stroke=\"#FF0000\"").count(),
+            2,
+            "mu_r 1 is unstable: {h}"
         );
-        assert_eq!(h.matches("<rect x=").count(), 6);
-        assert_eq!(h.matches(" †</text>").count(), 2, "mu_r 1 is unstable");
+        assert_eq!(h.matches(" †\n").count(), 2, "{h}");
     }
 }

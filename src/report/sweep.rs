@@ -331,7 +331,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                         if tag.is_empty() { "" } else { ", converged dt" }
                     ),
                     &sel,
-                );
+                )?;
                 write_atomic(
                     &figs.join(format!("heat_{code}_stage{k}{tag}.svg")),
                     svg.as_bytes(),
