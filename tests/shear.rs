@@ -4,10 +4,12 @@
 mod common;
 
 use common::{text, verify};
+use dem_verify::run::shear::ShearSummary;
 use std::path::Path;
 
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+/// The study's outcome, read back typed (schema checked).
+fn summary(dir: &Path) -> ShearSummary {
+    dem_verify::run::load(&dir.join("summary.json")).unwrap()
 }
 
 #[test]
@@ -35,12 +37,8 @@ fn ci_preset_agrees_with_liggghts() {
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let s = summary(&out);
-    assert_eq!(s["pass"], true);
-    let results = s["results"].as_array().unwrap();
-    let names: Vec<&str> = results
-        .iter()
-        .map(|r| r["channel"].as_str().unwrap())
-        .collect();
+    assert!(s.pass);
+    let names: Vec<&str> = s.results.iter().map(|r| r.channel.as_str()).collect();
     assert_eq!(
         names,
         [
@@ -50,23 +48,22 @@ fn ci_preset_agrees_with_liggghts() {
         ]
     );
     // physically sensible steady friction in both codes
-    for code in ["liggghts", "native"] {
-        let mu = s[code]["mu"].as_f64().unwrap();
-        assert!((0.2..0.8).contains(&mu), "{code} mu = {mu}");
-        assert_eq!(s[code]["per_seed_mu"].as_array().unwrap().len(), 3);
+    for (code, st) in [("liggghts", &s.liggghts), ("native", &s.native)] {
+        let st = st.as_ref().unwrap();
+        assert!((0.2..0.8).contains(&st.mu), "{code} mu = {}", st.mu);
+        assert_eq!(st.per_seed_mu.len(), 3);
     }
-    for seed in s["seeds"].as_array().unwrap() {
+    assert_eq!(s.paired_dmu.as_ref().map(|p| p.n), Some(3));
+    for seed in &s.seeds {
         // the codes agree step by step until chaos: at least as long as two native runs one
         // ulp apart (minus one output interval)
-        let ls = seed["shear_lockstep"]["last_agree_step"].as_u64().unwrap();
-        let chaos = seed["shear_chaos_baseline"]["last_agree_step"]
-            .as_u64()
-            .unwrap();
+        let ls = seed.shear_lockstep.as_ref().unwrap().last_agree_step;
+        let chaos = seed.shear_chaos_baseline.as_ref().unwrap().last_agree_step;
         assert!(
             ls + 20 >= chaos && ls >= 20,
             "shear lockstep {ls} vs chaos baseline {chaos}"
         );
-        assert!(seed["horizon"]["last_agree_step"].as_u64().unwrap() >= 500);
+        assert!(seed.horizon.as_ref().unwrap().last_agree_step >= 500);
     }
     for f in [
         "mu_strain.svg",
@@ -122,7 +119,7 @@ fn native_only_resumes_and_writes_snapshots() {
     );
     // the normal stress is held by the servo in the native run
     let s = summary(&out);
-    let stress = s["native"]["per_seed_stress"][0].as_f64().unwrap();
+    let stress = s.native.as_ref().unwrap().per_seed_stress[0];
     assert!((stress / 10e6 - 1.0).abs() < 0.1, "stress {stress}");
 }
 

@@ -8,7 +8,7 @@ use crate::report::bars::draw_err;
 use crate::run::sweep::RunResult;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Mean over seeds of one code at one (mu_r, eta_r, stage).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -100,28 +100,63 @@ enum Verdict {
     Unresolved,
 }
 
+/// The verdict on one of the paper's claims (written as the words in report.json).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ClaimVerdict {
+    /// Every resolved curve agrees.
+    #[serde(rename = "agrees")]
+    Agrees,
+    /// Some resolved curves agree, some disagree.
+    #[serde(rename = "partly agrees")]
+    PartlyAgrees,
+    /// Every resolved curve disagrees.
+    #[serde(rename = "disagrees")]
+    Disagrees,
+    /// No curve resolved: the differences are within the CIs.
+    #[serde(rename = "not resolved")]
+    NotResolved,
+    /// The sweep lacks the points.
+    #[serde(rename = "not assessable")]
+    NotAssessable,
+}
+
+impl ClaimVerdict {
+    pub fn words(self) -> &'static str {
+        match self {
+            ClaimVerdict::Agrees => "agrees",
+            ClaimVerdict::PartlyAgrees => "partly agrees",
+            ClaimVerdict::Disagrees => "disagrees",
+            ClaimVerdict::NotResolved => "not resolved",
+            ClaimVerdict::NotAssessable => "not assessable",
+        }
+    }
+}
+
+impl std::fmt::Display for ClaimVerdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.words())
+    }
+}
+
 /// The claim's verdict over its curves: agrees / disagrees (every resolved curve one way),
 /// partly agrees (both), not resolved (no curve resolved), not assessable (no curve).
-fn combine(v: &[Verdict]) -> String {
+fn combine(v: &[Verdict]) -> ClaimVerdict {
     let agree = v.contains(&Verdict::Agree);
     let disagree = v.contains(&Verdict::Disagree);
     match (v.is_empty(), agree, disagree) {
-        (true, _, _) => "not assessable",
-        (_, true, false) => "agrees",
-        (_, false, true) => "disagrees",
-        (_, true, true) => "partly agrees",
-        (_, false, false) => "not resolved",
+        (true, _, _) => ClaimVerdict::NotAssessable,
+        (_, true, false) => ClaimVerdict::Agrees,
+        (_, false, true) => ClaimVerdict::Disagrees,
+        (_, true, true) => ClaimVerdict::PartlyAgrees,
+        (_, false, false) => ClaimVerdict::NotResolved,
     }
-    .into()
 }
 
 /// One of the paper's conclusions, checked in numbers.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Conclusion {
     pub claim: String,
-    /// `agrees`, `partly agrees`, `disagrees`, `not resolved` (within the CIs) or
-    /// `not assessable` (the sweep lacks the points).
-    pub verdict: String,
+    pub verdict: ClaimVerdict,
     pub evidence: String,
 }
 
@@ -175,13 +210,11 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
         }
         let (first, last) = (c[0], c[c.len() - 1]);
         let rise = last.mu - first.mu;
-        let sig = ci(first) + ci(last);
-        verdicts.push(if rise > sig {
-            Verdict::Agree
-        } else if rise < -sig {
-            Verdict::Disagree
-        } else {
-            Verdict::Unresolved
+        let resolved = !within_cis(first.mu, ci(first), last.mu, ci(last));
+        verdicts.push(match (resolved, rise > 0.0) {
+            (false, _) => Verdict::Unresolved,
+            (true, true) => Verdict::Agree,
+            (true, false) => Verdict::Disagree,
         });
         ev.push(format!(
             "v = {} m/s: mu {:.3} at mu_r {} -> {:.3} at mu_r {} (change {:+.3}, CIs {:.3}/{:.3}){}",
@@ -193,7 +226,7 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
             rise,
             ci(first),
             ci(last),
-            if rise.abs() > sig { "" } else { ": within the CIs" }
+            if resolved { "" } else { ": within the CIs" }
         ));
     }
     out.push(Conclusion {
@@ -233,7 +266,8 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
                 }
                 None => {
                     let (first, last) = (c[0], c[c.len() - 1]);
-                    let rises = last.mu - first.mu > ci(first) + ci(last);
+                    let rises =
+                        last.mu > first.mu && !within_cis(first.mu, ci(first), last.mu, ci(last));
                     verdicts.push(if rises {
                         Verdict::Disagree
                     } else {
@@ -268,7 +302,7 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
     if stages.len() < 2 {
         out.push(Conclusion {
             claim: claim3,
-            verdict: "not assessable".into(),
+            verdict: ClaimVerdict::NotAssessable,
             evidence: "the sweep ran one shear speed; pass --speeds v1,v2,v3 to test it".into(),
         });
         return out;
@@ -287,7 +321,7 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
         let (a, b) = (curve(s0, e), curve(s1, e));
         for (p, q) in a.iter().zip(&b) {
             let d = q.mu - p.mu;
-            if d.abs() <= ci(p) + ci(q) {
+            if within_cis(p.mu, ci(p), q.mu, ci(q)) {
                 continue;
             }
             let near = criticals
@@ -307,11 +341,11 @@ pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
     out.push(Conclusion {
         claim: claim3,
         verdict: if ev.is_empty() && criticals.is_empty() {
-            "not resolved".into()
+            ClaimVerdict::NotResolved
         } else if ev.is_empty() || !near_ok {
-            "disagrees".into()
+            ClaimVerdict::Disagrees
         } else {
-            "agrees".into()
+            ClaimVerdict::Agrees
         },
         evidence: if ev.is_empty() {
             "no significant speed effect at any point".into()
@@ -506,19 +540,19 @@ mod tests {
             .filter(|r| r.run.seed == 1)
             .collect();
         let c = conclusions(&aggregate(&one), "native");
-        assert_eq!(c[0].verdict, "not resolved", "{}", c[0].evidence);
-        assert_eq!(c[1].verdict, "not resolved", "{}", c[1].evidence);
-        assert_eq!(c[2].verdict, "not resolved", "{}", c[2].evidence);
+        assert_eq!(c[0].verdict, ClaimVerdict::NotResolved, "{}", c[0].evidence);
+        assert_eq!(c[1].verdict, ClaimVerdict::NotResolved, "{}", c[1].evidence);
+        assert_eq!(c[2].verdict, ClaimVerdict::NotResolved, "{}", c[2].evidence);
     }
 
     #[test]
     fn checks_the_three_conclusions() {
         let c = conclusions(&aggregate(&paper_like()), "native");
         assert_eq!(c.len(), 3);
-        assert_eq!(c[0].verdict, "agrees", "{}", c[0].evidence);
-        assert_eq!(c[1].verdict, "agrees", "{}", c[1].evidence);
+        assert_eq!(c[0].verdict, ClaimVerdict::Agrees, "{}", c[0].evidence);
+        assert_eq!(c[1].verdict, ClaimVerdict::Agrees, "{}", c[1].evidence);
         assert!(c[1].evidence.contains("critical mu_r = 0.5"));
-        assert_eq!(c[2].verdict, "agrees", "{}", c[2].evidence);
+        assert_eq!(c[2].verdict, ClaimVerdict::Agrees, "{}", c[2].evidence);
         // a map where mu falls with mu_r at eta_r = 0 and rises everywhere else disagrees
         let mut r = paper_like();
         for x in &mut r {
@@ -533,8 +567,8 @@ mod tests {
             }
         }
         let c = conclusions(&aggregate(&r), "native");
-        assert_eq!(c[0].verdict, "disagrees");
-        assert_eq!(c[1].verdict, "disagrees");
+        assert_eq!(c[0].verdict, ClaimVerdict::Disagrees);
+        assert_eq!(c[1].verdict, ClaimVerdict::Disagrees);
         let h = heat_map(
             "mu",
             &aggregate(&r)

@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::report::bars::escape;
 use crate::report::html::{table, Page};
-use crate::report::paper::{aggregate, conclusions, heat_map, Conclusion, Point};
+use crate::report::paper::{aggregate, conclusions, heat_map, ClaimVerdict, Conclusion, Point};
 use crate::report::plot::{line_plot, Curve};
 use crate::run::convergence_outcome::{ConvergenceSummary, StudyCode};
 use crate::run::sweep::{collect, Manifest};
@@ -195,11 +195,13 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                     vec![
                         (escape(&c.claim), ""),
                         (
-                            escape(&c.verdict),
-                            match c.verdict.as_str() {
-                                "agrees" => "pass",
-                                "not assessable" | "not resolved" | "partly agrees" => "warn",
-                                _ => "fail",
+                            escape(c.verdict.words()),
+                            match c.verdict {
+                                ClaimVerdict::Agrees => "pass",
+                                ClaimVerdict::NotAssessable
+                                | ClaimVerdict::NotResolved
+                                | ClaimVerdict::PartlyAgrees => "warn",
+                                ClaimVerdict::Disagrees => "fail",
                             },
                         ),
                         (escape(&c.evidence), ""),
@@ -208,7 +210,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 .collect();
             page.html(&format!("<h3>{} ({title})</h3>", escape(code)));
             page.html(&table(&["paper's claim", "our result", "evidence"], &rows));
-            for c in cs.iter().filter(|c| c.verdict != "agrees") {
+            for c in cs.iter().filter(|c| c.verdict != ClaimVerdict::Agrees) {
                 page.para(&format!(
                     "Where we differ from the paper ({code}, {title}): \"{}\" {} — {}.",
                     c.claim, c.verdict, c.evidence
