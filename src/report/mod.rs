@@ -9,6 +9,7 @@ pub mod nightly;
 pub mod paper;
 pub mod plot;
 pub mod progress;
+pub mod replay;
 pub mod shear;
 pub mod sweep;
 pub mod vtk;
