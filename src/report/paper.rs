@@ -6,6 +6,7 @@ use crate::compare::{mean_ci95, within_cis};
 use crate::error::Result;
 use crate::report::bars::draw_err;
 use crate::run::sweep::RunResult;
+use crate::run::Code;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use serde::{Deserialize, Serialize};
@@ -13,7 +14,7 @@ use serde::{Deserialize, Serialize};
 /// Mean over seeds of one code at one (mu_r, eta_r, stage).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Point {
-    pub code: String,
+    pub code: Code,
     pub mu_r: f64,
     pub eta_r: f64,
     pub stage: usize,
@@ -30,17 +31,12 @@ pub struct Point {
 /// Aggregates run results into points, sorted by code, stage, eta_r, mu_r.
 pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
     let mut pts: Vec<Point> = Vec::new();
-    let mut keys: Vec<(String, u64, u64, usize)> = Vec::new();
+    let mut keys: Vec<(Code, u64, u64, usize)> = Vec::new();
     for r in results {
         for (k, st) in r.stages.iter().enumerate() {
-            for (code, c) in [("liggghts", &st.liggghts), ("native", &st.native)] {
+            for (code, c) in [(Code::Liggghts, &st.liggghts), (Code::Native, &st.native)] {
                 if c.is_some() {
-                    let key = (
-                        code.to_string(),
-                        r.run.mu_r.to_bits(),
-                        r.run.eta_r.to_bits(),
-                        k,
-                    );
+                    let key = (code, r.run.mu_r.to_bits(), r.run.eta_r.to_bits(), k);
                     if !keys.contains(&key) {
                         keys.push(key);
                     }
@@ -58,7 +54,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
             .iter()
             .filter_map(|r| {
                 let st = &r.stages[k];
-                let c = if code == "native" {
+                let c = if code == Code::Native {
                     &st.native
                 } else {
                     &st.liggghts
@@ -83,8 +79,8 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
         });
     }
     pts.sort_by(|a, b| {
-        (a.code.as_str(), a.stage)
-            .cmp(&(b.code.as_str(), b.stage))
+        (a.code, a.stage)
+            .cmp(&(b.code, b.stage))
             .then(a.eta_r.total_cmp(&b.eta_r))
             .then(a.mu_r.total_cmp(&b.mu_r))
     });
@@ -182,7 +178,7 @@ pub fn critical_mu_r(curve: &[&Point]) -> Option<(f64, f64)> {
 /// The three conclusions for one code's points (the paper: with eta_r = 0 mu rises with mu_r;
 /// with eta_r > 0 there is a critical mu_r beyond which mu falls; a speed effect only near that
 /// critical point).
-pub fn conclusions(points: &[Point], code: &str) -> Vec<Conclusion> {
+pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
     let pts: Vec<&Point> = points.iter().filter(|p| p.code == code).collect();
     let stages: Vec<usize> = {
         let mut s: Vec<usize> = pts.iter().map(|p| p.stage).collect();
@@ -539,7 +535,7 @@ mod tests {
             .into_iter()
             .filter(|r| r.run.seed == 1)
             .collect();
-        let c = conclusions(&aggregate(&one), "native");
+        let c = conclusions(&aggregate(&one), Code::Native);
         assert_eq!(c[0].verdict, ClaimVerdict::NotResolved, "{}", c[0].evidence);
         assert_eq!(c[1].verdict, ClaimVerdict::NotResolved, "{}", c[1].evidence);
         assert_eq!(c[2].verdict, ClaimVerdict::NotResolved, "{}", c[2].evidence);
@@ -547,7 +543,7 @@ mod tests {
 
     #[test]
     fn checks_the_three_conclusions() {
-        let c = conclusions(&aggregate(&paper_like()), "native");
+        let c = conclusions(&aggregate(&paper_like()), Code::Native);
         assert_eq!(c.len(), 3);
         assert_eq!(c[0].verdict, ClaimVerdict::Agrees, "{}", c[0].evidence);
         assert_eq!(c[1].verdict, ClaimVerdict::Agrees, "{}", c[1].evidence);
@@ -566,7 +562,7 @@ mod tests {
                 }
             }
         }
-        let c = conclusions(&aggregate(&r), "native");
+        let c = conclusions(&aggregate(&r), Code::Native);
         assert_eq!(c[0].verdict, ClaimVerdict::Disagrees);
         assert_eq!(c[1].verdict, ClaimVerdict::Disagrees);
         let h = heat_map(

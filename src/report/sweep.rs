@@ -10,6 +10,7 @@ use crate::report::paper::{aggregate, conclusions, heat_map, ClaimVerdict, Concl
 use crate::report::plot::{line_plot, Curve};
 use crate::run::convergence_outcome::{ConvergenceSummary, StudyCode};
 use crate::run::sweep::{collect, Manifest};
+use crate::run::Code;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -42,9 +43,9 @@ fn err_plot(path: &Path, title: &str, x_desc: &str, data: &[ErrCurve]) -> Result
 struct SweepReport {
     schema: u32,
     points: Vec<Point>,
-    conclusions: Vec<(String, Vec<Conclusion>)>,
+    conclusions: Vec<(Code, Vec<Conclusion>)>,
     converged_points: Vec<Point>,
-    converged_conclusions: Vec<(String, Vec<Conclusion>)>,
+    converged_conclusions: Vec<(Code, Vec<Conclusion>)>,
     runs: usize,
     run_wall_s_liggghts: f64,
     run_wall_s_native: f64,
@@ -77,7 +78,7 @@ fn converged_points(dir: &Path) -> Result<Vec<Point>> {
         .min_by(|a, b| a.dt_factor.total_cmp(&b.dt_factor))
         .ok_or_else(bad)?;
     Ok(vec![Point {
-        code: "native".into(),
+        code: Code::Native,
         mu_r: v.mu_r,
         eta_r: v.eta_r,
         stage: v.stage,
@@ -110,14 +111,14 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     for c in converged {
         conv_points.extend(converged_points(c)?);
     }
-    let codes: Vec<String> = {
-        let mut c: Vec<String> = points.iter().map(|p| p.code.clone()).collect();
+    let codes: Vec<Code> = {
+        let mut c: Vec<Code> = points.iter().map(|p| p.code).collect();
         c.dedup();
         c
     };
-    let concl: Vec<(String, Vec<Conclusion>)> = codes
+    let concl: Vec<(Code, Vec<Conclusion>)> = codes
         .iter()
-        .map(|c| (c.clone(), conclusions(&points, c)))
+        .map(|&c| (c, conclusions(&points, c)))
         .collect();
     // the conclusions judged on trustworthy numbers: each point where the explicit dashpot is
     // stable as it is, each unstable point by its converged-dt result, unstable points
@@ -136,13 +137,13 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 .cloned()
         })
         .collect();
-    let conv_concl: Vec<(String, Vec<Conclusion>)> = if conv_points.is_empty() {
+    let conv_concl: Vec<(Code, Vec<Conclusion>)> = if conv_points.is_empty() {
         Vec::new()
     } else {
         codes
             .iter()
-            .filter(|c| judged.iter().any(|p| &p.code == *c))
-            .map(|c| (c.clone(), conclusions(&judged, c)))
+            .filter(|c| judged.iter().any(|p| p.code == **c))
+            .map(|&c| (c, conclusions(&judged, c)))
             .collect()
     };
     let figs = dir.join("figures");
@@ -208,7 +209,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                     ]
                 })
                 .collect();
-            page.html(&format!("<h3>{} ({title})</h3>", escape(code)));
+            page.html(&format!("<h3>{code} ({title})</h3>"));
             page.html(&table(&["paper's claim", "our result", "evidence"], &rows));
             for c in cs.iter().filter(|c| c.verdict != ClaimVerdict::Agrees) {
                 page.para(&format!(
@@ -258,7 +259,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 for code in &codes {
                     let sel: Vec<&Point> = set
                         .iter()
-                        .filter(|p| &p.code == code && p.stage == k && p.eta_r == e)
+                        .filter(|p| p.code == *code && p.stage == k && p.eta_r == e)
                         .collect();
                     if sel.is_empty() {
                         continue;
@@ -266,7 +267,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                     data.push(ErrCurve {
                         label: format!("eta_r {e} {code}{tag}"),
                         color: ci,
-                        dashed: code == "liggghts" || !tag.is_empty(),
+                        dashed: *code == Code::Liggghts || !tag.is_empty(),
                         points: sel.iter().map(|p| (p.mu_r, p.mu)).collect(),
                         err: sel.iter().map(|p| p.mu_ci95).collect(),
                     });
@@ -293,13 +294,13 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 for code in &codes {
                     let sel: Vec<&Point> = points
                         .iter()
-                        .filter(|p| &p.code == code && p.mu_r == m_r && p.eta_r == e)
+                        .filter(|p| p.code == *code && p.mu_r == m_r && p.eta_r == e)
                         .collect();
                     if !sel.is_empty() {
                         data.push(ErrCurve {
                             label: format!("eta_r {e} {code}"),
                             color: ci,
-                            dashed: code == "liggghts",
+                            dashed: *code == Code::Liggghts,
                             points: sel.iter().map(|p| (p.speed, p.mu)).collect(),
                             err: sel.iter().map(|p| p.mu_ci95).collect(),
                         });
@@ -322,7 +323,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             for (set, tag) in [(&points, ""), (&conv_points, "_converged")] {
                 let sel: Vec<&Point> = set
                     .iter()
-                    .filter(|p| &p.code == code && p.stage == k)
+                    .filter(|p| p.code == *code && p.stage == k)
                     .collect();
                 if sel.is_empty() {
                     continue;
@@ -355,7 +356,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 .map(|q| format!("{:.4} ± {:.4}", q.mu, q.mu_ci95))
                 .unwrap_or("–".into());
             vec![
-                (p.code.clone(), ""),
+                (p.code.to_string(), ""),
                 (format!("{}", p.speed), "num"),
                 (format!("{}", p.mu_r), "num"),
                 (format!("{}", p.eta_r), "num"),

@@ -82,6 +82,31 @@ impl Engine {
     }
 }
 
+/// One of the two codes compared (ordered LIGGGHTS first, as every table lists them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Code {
+    Liggghts,
+    Native,
+}
+
+impl Code {
+    pub const BOTH: [Code; 2] = [Code::Liggghts, Code::Native];
+
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Code::Liggghts => "liggghts",
+            Code::Native => "native",
+        }
+    }
+}
+
+impl std::fmt::Display for Code {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.keyword())
+    }
+}
+
 /// Where LIGGGHTS is and how long one of its runs may take.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LiggghtsRequest {
