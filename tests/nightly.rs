@@ -6,6 +6,7 @@
 mod common;
 
 use common::{text, verify};
+use dem_verify::run::nightly::NightlySummary;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -110,38 +111,48 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
 
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(s["pass"], true);
-    assert_eq!(s["quick"], true);
-    let contact = s["contact"].as_array().unwrap();
-    assert_eq!(contact.len(), 23, "every built-in case x applicable model");
-    for c in contact {
-        assert!(c["max_rel_err"].as_f64().unwrap() <= 1e-9, "{c}");
+    // the night's outcome, read back typed (schema checked)
+    let s: NightlySummary = dem_verify::run::load(&out.join("summary.json")).unwrap();
+    assert!(s.pass && s.quick);
+    assert_eq!(
+        s.contact.len(),
+        23,
+        "every built-in case x applicable model"
+    );
+    for c in &s.contact {
+        assert!(c.max_rel_err <= 1e-9, "{c:?}");
     }
-    let shear = s["shear"].as_array().unwrap();
-    assert_eq!(shear.len(), 5);
-    for r in shear {
-        for code in ["liggghts", "native"] {
-            let mu = r[code]["mu"].as_f64().unwrap();
-            assert!((0.1..0.9).contains(&mu), "{} {code}: mu {mu}", r["name"]);
-            let stress = r[code]["normal_stress"].as_f64().unwrap();
-            assert!((stress / 1e7 - 1.0).abs() < 0.03, "{stress}");
-            assert!(r[code]["erot"].as_f64().unwrap() > 0.0);
+    assert_eq!(s.shear.len(), 5);
+    for r in &s.shear {
+        for (code, st) in [("liggghts", &r.liggghts), ("native", &r.native)] {
+            let st = st.as_ref().unwrap();
+            assert!(
+                (0.1..0.9).contains(&st.mu),
+                "{} {code}: mu {}",
+                r.name,
+                st.mu
+            );
+            assert!(
+                (st.normal_stress / 1e7 - 1.0).abs() < 0.03,
+                "{}",
+                st.normal_stress
+            );
+            assert!(st.erot > 0.0);
         }
-        assert!(r["lockstep_steps"].as_u64().unwrap() > 10, "{r}");
+        assert!(r.lockstep_steps.unwrap() > 10, "{r:?}");
         // every shear point is also replayed contact by contact, and agrees
-        let rp = &r["replay"];
-        assert_eq!(rp["pass"], true, "{r}");
-        assert_eq!(rp["windows"].as_u64(), Some(4), "{r}");
-        assert!(rp["worst_step1"].as_f64().unwrap() <= 1e-12, "{r}");
-        assert_eq!(rp["min_horizon"].as_u64(), Some(12), "{r}");
+        let rp = r.replay.as_ref().unwrap();
+        assert!(rp.pass, "{r:?}");
+        assert_eq!(rp.windows, 4, "{r:?}");
+        assert!(rp.worst_step1 <= 1e-12, "{r:?}");
+        assert_eq!(rp.min_horizon, 12, "{r:?}");
     }
     // the paper's point with the unstable explicit dashpot is flagged
-    let unstable: Vec<&str> = shear
+    let unstable: Vec<&str> = s
+        .shear
         .iter()
-        .filter(|r| r["dashpot_stable"] == false)
-        .map(|r| r["name"].as_str().unwrap())
+        .filter(|r| r.dashpot_stable == Some(false))
+        .map(|r| r.name.as_str())
         .collect();
     assert!(
         unstable.contains(&"ci/epsd mu_r=1 eta_r=0.5"),

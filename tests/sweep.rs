@@ -5,6 +5,8 @@
 mod common;
 
 use common::{text, verify};
+use dem_verify::run::convergence::{ConvergenceSummary, StudyCode};
+use dem_verify::run::sweep::Manifest;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -49,14 +51,9 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
         out.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    let m: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("manifest.json")).unwrap()).unwrap();
-    let runs = m["runs"].as_array().unwrap();
-    assert_eq!(runs.len(), 8);
-    let mut hashes: Vec<&str> = runs
-        .iter()
-        .map(|r| r["input_hash"].as_str().unwrap())
-        .collect();
+    let m = Manifest::load(&out.join("manifest.json")).unwrap();
+    assert_eq!(m.runs.len(), 8);
+    let mut hashes: Vec<&str> = m.runs.iter().map(|r| r.input_hash.as_str()).collect();
     hashes.sort();
     hashes.dedup();
     assert_eq!(hashes.len(), 8);
@@ -175,19 +172,17 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
     let json = |p: &Path| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
     };
-    let (rep, study) = (
-        json(&out.join("report.json")),
-        json(&conv.join("summary.json")),
-    );
+    // report.json is read as JSON (its format is what is checked); the study typed
+    let rep = json(&out.join("report.json"));
+    let study: ConvergenceSummary = dem_verify::run::load(&conv.join("summary.json")).unwrap();
     let cp = rep["converged_points"].as_array().unwrap();
     assert_eq!(cp.len(), 1, "{cp:?}");
-    let finest = study["points"]
-        .as_array()
-        .unwrap()
+    let finest = study
+        .points
         .iter()
-        .find(|p| p["code"] == "native" && p["dt_factor"] == 0.5)
+        .find(|p| p.code == StudyCode::Native && p.dt_factor == 0.5)
         .unwrap();
-    assert_eq!(cp[0]["mu"], finest["steady"]["mu"]);
+    assert_eq!(cp[0]["mu"].as_f64(), Some(finest.steady.mu));
     assert_eq!(
         (cp[0]["mu_r"].as_f64(), cp[0]["eta_r"].as_f64()),
         (Some(1.0), Some(0.5))
