@@ -55,15 +55,20 @@ fn contact(c: &mut Criterion) {
     }
 }
 
-fn neighbor(c: &mut Criterion) {
-    let case = ShearCase::preset(
+/// The fast preset's case (epsd, mu_r 0.5, eta_r 0.5, seed 1) the shear benchmarks use.
+fn fast_case() -> ShearCase {
+    ShearCase::preset(
         dem_verify::spec::shear::Preset::Fast,
         RollingModel::Epsd,
         0.5,
         0.5,
         1,
     )
-    .unwrap();
+    .unwrap()
+}
+
+fn neighbor(c: &mut Criterion) {
+    let case = fast_case();
     let pk = loose_packing(&case);
     let mut nl = NeighborList::default();
     let b = Periodic {
@@ -76,14 +81,7 @@ fn neighbor(c: &mut Criterion) {
 }
 
 fn trimesh(c: &mut Criterion) {
-    let case = ShearCase::preset(
-        dem_verify::spec::shear::Preset::Fast,
-        RollingModel::Epsd,
-        0.5,
-        0.5,
-        1,
-    )
-    .unwrap();
+    let case = fast_case();
     let plate = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
     let mesh = TriMesh::new(
         &plate_triangles(&plate, case.box_z),

@@ -9,7 +9,7 @@ use crate::packing::Packing;
 use crate::report::progress::Progress;
 use crate::report::vtk;
 use crate::series::Series;
-use crate::solver::shear::ShearSim;
+use crate::solver::shear::{PlateRecord, ShearSim};
 use crate::spec::shear::ShearCase;
 use std::path::Path;
 use std::time::Instant;
@@ -27,6 +27,22 @@ pub struct Row {
     pub erot: f64,
     /// Fraction of touching pairs at full rolling mobilisation (native only; NaN for LIGGGHTS).
     pub mobilised: f64,
+}
+
+impl From<&PlateRecord> for Row {
+    /// The native solver's output record as a row (its shear displacement is recomputed from
+    /// the case in [`shear_series`], as for LIGGGHTS).
+    fn from(r: &PlateRecord) -> Self {
+        Row {
+            step: r.step,
+            top_force: r.top_force,
+            bottom_force: r.bottom_force,
+            top_y: r.top_y,
+            ke: r.ke,
+            erot: r.erot,
+            mobilised: r.mobilised,
+        }
+    }
 }
 
 impl Row {
@@ -145,18 +161,7 @@ pub fn run_native(
     let ends = run_ends(case);
     let mut rows = Vec::new();
     let mut compacted = None;
-    let rec = |sim: &ShearSim| {
-        let r = sim.record();
-        Row {
-            step: r.step,
-            top_force: r.top_force,
-            bottom_force: r.bottom_force,
-            top_y: r.top_y,
-            ke: r.ke,
-            erot: r.erot,
-            mobilised: r.mobilised,
-        }
-    };
+    let rec = |sim: &ShearSim| Row::from(&sim.record());
     let result = (|| -> Result<()> {
         sim.setup(0.0)?;
         rows.push(rec(&sim));
