@@ -334,7 +334,10 @@ pub fn block_ci95(v: &[f64]) -> f64 {
     mean_ci95(&blocks).1
 }
 
-/// Steady-state figures of one code over its seeds.
+/// Steady-state figures of one code over its seeds: the one set of figures every study
+/// reports per code (the shear summary, each sweep stage, each convergence point, the
+/// nightly's rows), made by [`steady`]. NaN (for example `mobilised` of LIGGGHTS, which has no
+/// such output) is written as null and read back as NaN.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Steady {
     /// Mean mu over the steady window, per seed.
@@ -345,8 +348,23 @@ pub struct Steady {
     pub mu: f64,
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mu_ci95: f64,
-    /// Mean normal stress on the top plate in the window [Pa], per seed.
+    /// Mean normal stress on the top plate in the window [Pa], per seed, and over seeds.
     pub per_seed_stress: Vec<f64>,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub normal_stress: f64,
+    /// Rotational kinetic energy [J]: mean over seeds of the window means, with its 95 % CI
+    /// (as for mu).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub erot: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub erot_ci95: f64,
+    /// Translational kinetic energy [J], mean over seeds.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub ke: f64,
+    /// Fraction of touching pairs at full rolling mobilisation, mean over seeds (native;
+    /// NaN for LIGGGHTS).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub mobilised: f64,
 }
 
 /// Means of one seed's series over a window: the figures every study reports per code.
@@ -380,42 +398,35 @@ pub fn steady_window(stage_start: u64, stage_end: u64) -> (u64, u64) {
     (stage_start + (stage_end - stage_start) / 2, stage_end)
 }
 
-/// Steady-state figures from one series per seed; `area` converts force to stress.
+/// Steady-state figures from one series per seed ([`window_figures`] of each, then the
+/// mean over seeds); `area` converts force to stress. The CIs are over seeds; with one seed
+/// they come from 10 block means of the window ([`block_ci95`]).
 pub fn steady(series: &[Series], window: (u64, u64), area: f64) -> Steady {
-    let mut per_seed_mu = Vec::new();
-    let mut per_seed_stress = Vec::new();
-    let mut single_ci = f64::INFINITY;
-    for s in series {
-        let (cmu, cfy) = (
-            s.col("mu[-]").expect("mu column"),
-            s.col("top_f_y[N]").expect("force column"),
-        );
-        let rows: Vec<&Vec<f64>> = s
-            .steps
-            .iter()
-            .zip(&s.rows)
-            .filter(|(st, _)| **st > window.0 && **st <= window.1)
-            .map(|(_, r)| r)
-            .collect();
-        let mu: Vec<f64> = rows.iter().map(|r| r[cmu]).collect();
-        let (m, _) = mean_ci95(&mu);
-        per_seed_mu.push(m);
-        per_seed_stress
-            .push(rows.iter().map(|r| r[cfy]).sum::<f64>() / rows.len().max(1) as f64 / area);
-        if series.len() == 1 {
-            single_ci = block_ci95(&mu);
-        }
-    }
-    let (mu, mu_ci95) = if series.len() == 1 {
-        (per_seed_mu[0], single_ci)
-    } else {
-        mean_ci95(&per_seed_mu)
+    let per: Vec<WindowFigures> = series
+        .iter()
+        .map(|s| window_figures(s, window, area))
+        .collect();
+    let mean_and_ci = |pick: fn(&WindowFigures) -> f64, header: &str| match series {
+        [one] => (
+            pick(&per[0]),
+            block_ci95(&one.window_values(header, window).unwrap_or_default()),
+        ),
+        _ => mean_ci95(&per.iter().map(pick).collect::<Vec<f64>>()),
     };
+    let mean =
+        |pick: fn(&WindowFigures) -> f64| mean_ci95(&per.iter().map(pick).collect::<Vec<f64>>()).0;
+    let (mu, mu_ci95) = mean_and_ci(|f| f.mu, "mu[-]");
+    let (erot, erot_ci95) = mean_and_ci(|f| f.erot, "erot[J]");
     Steady {
-        per_seed_mu,
+        per_seed_mu: per.iter().map(|f| f.mu).collect(),
         mu,
         mu_ci95,
-        per_seed_stress,
+        per_seed_stress: per.iter().map(|f| f.normal_stress).collect(),
+        normal_stress: mean(|f| f.normal_stress),
+        erot,
+        erot_ci95,
+        ke: mean(|f| f.ke),
+        mobilised: mean(|f| f.mobilised),
     }
 }
 
@@ -520,5 +531,15 @@ mod shear_tests {
         );
         assert_eq!(st.per_seed_mu, vec![0.35, 0.2]);
         assert_eq!(st.per_seed_stress, vec![1.0, 1.0]);
+        assert_eq!(st.normal_stress, 1.0);
+        // no kinetic-energy or mobilisation columns: NaN, never a made-up zero
+        assert!(st.erot.is_nan() && st.ke.is_nan() && st.mobilised.is_nan());
+        let one = steady(&[s(&[1.0, 2.0, 3.0, 4.0])], steady_window(0, 30), 10.0);
+        assert_eq!((one.mu, one.per_seed_mu.clone()), (0.35, vec![0.35]));
+        assert!(
+            one.mu_ci95.is_finite() && one.mu_ci95 > 0.0,
+            "block CI: {}",
+            one.mu_ci95
+        );
     }
 }

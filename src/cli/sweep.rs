@@ -8,8 +8,8 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::report::sweep::report;
 use crate::run::sweep::{
-    collect_dir, plan, run_one, run_pending, slurm_script, CodeStage, Manifest, RunResult,
-    SweepBase, SweepRequest,
+    collect_dir, plan, run_one, run_pending, slurm_script, Manifest, RunResult, SweepBase,
+    SweepRequest,
 };
 use crate::run::Verdict;
 use clap::{Args, Subcommand, ValueEnum};
@@ -146,7 +146,7 @@ fn stage_line(r: &RunResult) -> String {
     r.stages
         .iter()
         .map(|s| {
-            let f = |c: &Option<CodeStage>| {
+            let f = |c: &Option<crate::compare::Steady>| {
                 c.as_ref()
                     .map(|c| format!("{:.3}", c.mu))
                     .unwrap_or("-".into())

@@ -23,7 +23,7 @@ pub fn plots(out: &Path, points: &[DtPoint]) -> Result<()> {
             "erot_dt.svg",
             "mean rotational kinetic energy against time step (log scale)",
             "log10 E_rot [J]",
-            |p: &DtPoint| p.erot.max(1e-300).log10(),
+            |p: &DtPoint| p.steady.erot.max(1e-300).log10(),
             |_: &DtPoint| 0.0,
         ),
     ] {

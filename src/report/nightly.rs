@@ -186,8 +186,8 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
                 .iter()
                 .enumerate()
                 .map(|(k, c)| Bar {
-                    value: c.as_ref().map(|c| c.mu).unwrap_or(f64::NAN),
-                    ci95: c.as_ref().map(|c| c.mu_ci95).unwrap_or(f64::NAN),
+                    value: c.as_ref().map(|c| c.steady.mu).unwrap_or(f64::NAN),
+                    ci95: c.as_ref().map(|c| c.steady.mu_ci95).unwrap_or(f64::NAN),
                     color: k,
                 })
                 .collect(),
@@ -349,21 +349,25 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
         if let Some(c) = c {
             rows.push(vec![
                 (code.to_string(), ""),
-                (format!("{:.4} ± {:.4}", c.mu, c.mu_ci95), "num"),
                 (
-                    c.per_seed_mu
+                    format!("{:.4} ± {:.4}", c.steady.mu, c.steady.mu_ci95),
+                    "num",
+                ),
+                (
+                    c.steady
+                        .per_seed_mu
                         .iter()
                         .map(|m| format!("{m:.4}"))
                         .collect::<Vec<_>>()
                         .join(", "),
                     "num",
                 ),
-                (format!("{:.3}", c.normal_stress / 1e6), "num"),
-                (format!("{:.3e}", c.erot), "num"),
-                (format!("{:.3e}", c.ke), "num"),
+                (format!("{:.3}", c.steady.normal_stress / 1e6), "num"),
+                (format!("{:.3e}", c.steady.erot), "num"),
+                (format!("{:.3e}", c.steady.ke), "num"),
                 (
-                    if c.mobilised.is_finite() {
-                        format!("{:.3}", c.mobilised)
+                    if c.steady.mobilised.is_finite() {
+                        format!("{:.3}", c.steady.mobilised)
                     } else {
                         "not output".into()
                     },

@@ -464,7 +464,8 @@ pub fn heat_map(title: &str, points: &[&Point]) -> Result<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::run::sweep::{CodeStage, StageResult};
+    use crate::compare::Steady;
+    use crate::run::sweep::StageResult;
 
     fn run(mu_r: f64, eta_r: f64, seed: u64, mus: &[f64]) -> RunResult {
         RunResult {
@@ -486,11 +487,16 @@ mod tests {
                     speed: 0.01 * (k + 1) as f64,
                     window_steps: (0, 1),
                     liggghts: None,
-                    native: Some(CodeStage {
+                    native: Some(Steady {
+                        per_seed_mu: vec![mu],
                         mu,
+                        mu_ci95: 0.01,
+                        per_seed_stress: vec![1e7],
                         normal_stress: 1e7,
                         erot: 1e-6,
-                        mobilised: Some(0.2),
+                        erot_ci95: 1e-7,
+                        ke: 1e-5,
+                        mobilised: 0.2,
                     }),
                 })
                 .collect(),

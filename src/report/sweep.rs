@@ -90,7 +90,7 @@ fn converged_points(dir: &Path) -> Result<Vec<Point>> {
             f64::INFINITY
         },
         seeds: finest.steady.per_seed_mu.len(),
-        erot: finest.erot,
+        erot: finest.steady.erot,
         dashpot_stable: finest.stability.stable,
         stability_s: finest.stability.entries.first().ok_or_else(bad)?.criterion,
     }])

@@ -6,7 +6,7 @@ pub use super::convergence_outcome::*;
 use super::shear::ShearRequest;
 use super::sweep::run_input_hash;
 use super::utc_stamp;
-use crate::compare::{block_ci95, mean_ci95, steady, steady_window, window_figures, within_cis};
+use crate::compare::{steady, steady_window, within_cis};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
@@ -180,23 +180,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         let ends = run_ends(&c);
         let window = steady_window(ends[ends.len() - 2], ends[ends.len() - 1]);
         let st = steady(series, window, c.box_x * c.box_z);
-        let area = c.box_x * c.box_z;
-        let erots: Vec<f64> = series
-            .iter()
-            .map(|s| window_figures(s, window, area).erot)
-            .collect();
-        let (erot, erot_ci95) = if series.len() == 1 {
-            (
-                erots[0],
-                block_ci95(
-                    &series[0]
-                        .window_values("erot[J]", window)
-                        .unwrap_or_default(),
-                ),
-            )
-        } else {
-            mean_ci95(&erots)
-        };
         if *code == StudyCode::Implicit {
             c.models.rolling = RollingModel::EpsdImplicit;
         }
@@ -205,8 +188,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             dt_factor: *f,
             dt: c.dt,
             steady: st,
-            erot,
-            erot_ci95,
             stability: stability(&c),
         });
     }
@@ -286,8 +267,8 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             p.dt,
             p.steady.mu,
             p.steady.mu_ci95,
-            p.erot,
-            p.erot_ci95,
+            p.steady.erot,
+            p.steady.erot_ci95,
             p.stability.entries[0].criterion
         );
     }

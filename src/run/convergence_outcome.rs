@@ -43,13 +43,8 @@ pub struct DtPoint {
     pub dt_factor: f64,
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub dt: f64,
+    /// mu, stress, E_rot (with their CIs), ke and mobilisation over the steady window.
     pub steady: Steady,
-    /// Mean rotational kinetic energy in the steady window, over seeds [J], with 95 % CI
-    /// (over seeds; with one seed from 10 block means of the window).
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub erot: f64,
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub erot_ci95: f64,
     pub stability: StabilityReport,
 }
 

@@ -24,7 +24,7 @@ use std::time::Duration;
 
 /// Version of the outcome and summary files (`summary.json`, `outcome.json`) written by the run
 /// layer; readers refuse other versions.
-pub const SCHEMA: u32 = 1;
+pub const SCHEMA: u32 = 2;
 
 /// What a study concluded (a command's exit status: 0 agree, 1 disagree).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

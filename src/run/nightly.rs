@@ -10,8 +10,8 @@ use super::contact::{contact_one, contact_runs, ContactRequest, RollingChoice};
 pub use super::nightly_outcome::*;
 use super::replay::{default_states, ReplayOutcome, ReplayRequest, STEP1_RTOL};
 use super::shear::{SeedResult, ShearRequest, ShearSummary};
-use super::{utc_stamp, Engine, LiggghtsRequest, Verdict};
-use crate::compare::{window_figures, within_cis, CONTACT_RTOL, MU_ATOL, STRESS_RTOL};
+use super::{utc_stamp, Code, Engine, LiggghtsRequest, Verdict};
+use crate::compare::{within_cis, CONTACT_RTOL, MU_ATOL, STRESS_RTOL};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
@@ -380,50 +380,35 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary) -> Result<()> {
     row.chaos_baseline_steps =
         lock(&|r| r.shear_chaos_baseline.as_ref().map(|h| h.last_agree_step))
             .and_then(|v| v.into_iter().min());
-    for (code, st, all) in [
-        ("liggghts", &s.liggghts, &s.series.liggghts),
-        ("native", &s.native, &s.series.native),
-    ] {
+    for code in Code::BOTH {
+        let (st, slot) = match code {
+            Code::Liggghts => (&s.liggghts, &mut row.liggghts),
+            Code::Native => (&s.native, &mut row.native),
+        };
         let Some(st) = st else { continue };
-        if all.len() != s.seeds.len() {
+        if st.per_seed_mu.len() != s.seeds.len() {
             return Err(Error::Missing {
-                what: format!("{code} series ({} for {} seeds)", all.len(), s.seeds.len()),
+                what: format!(
+                    "{code} steady figures ({} for {} seeds)",
+                    st.per_seed_mu.len(),
+                    s.seeds.len()
+                ),
                 dir: PathBuf::from(&row.dir),
             });
         }
-        let (mut erot, mut ke, mut mob) = (0.0, 0.0, 0.0);
-        for series in all {
-            // the area only scales the stress, which comes from `st`
-            let f = window_figures(series, s.steady_window_steps, 1.0);
-            erot += f.erot;
-            ke += f.ke;
-            mob += f.mobilised;
-        }
-        let n = s.seeds.len().max(1) as f64;
         let (wall, thr): (Vec<f64>, Vec<f64>) = s
             .seeds
             .iter()
             .filter_map(|r| match code {
-                "liggghts" => r.liggghts_wall_s.zip(r.liggghts_particle_steps_per_s),
-                _ => r.native_wall_s.zip(r.native_particle_steps_per_s),
+                Code::Liggghts => r.liggghts_wall_s.zip(r.liggghts_particle_steps_per_s),
+                Code::Native => r.native_wall_s.zip(r.native_particle_steps_per_s),
             })
             .unzip();
-        let stats = CodeStats {
-            mu: st.mu,
-            mu_ci95: st.mu_ci95,
-            per_seed_mu: st.per_seed_mu.clone(),
-            normal_stress: st.per_seed_stress.iter().sum::<f64>() / n,
-            erot: erot / n,
-            ke: ke / n,
-            mobilised: mob / n,
+        *slot = Some(CodeStats {
+            steady: st.clone(),
             wall_s: wall.iter().sum(),
             particle_steps_per_s: thr.iter().sum::<f64>() / thr.len().max(1) as f64,
-        };
-        if code == "liggghts" {
-            row.liggghts = Some(stats);
-        } else {
-            row.native = Some(stats);
-        }
+        });
     }
     Ok(())
 }
@@ -464,10 +449,10 @@ fn records(s: &NightlySummary, unix_time: u64, out: &Path) -> Vec<Record> {
         error: r.error.clone(),
         max_err: r.dmu,
         tolerance: r.mu_atol,
-        mu_liggghts: r.liggghts.as_ref().map(|c| c.mu),
-        mu_liggghts_ci95: r.liggghts.as_ref().map(|c| c.mu_ci95),
-        mu_native: r.native.as_ref().map(|c| c.mu),
-        mu_native_ci95: r.native.as_ref().map(|c| c.mu_ci95),
+        mu_liggghts: r.liggghts.as_ref().map(|c| c.steady.mu),
+        mu_liggghts_ci95: r.liggghts.as_ref().map(|c| c.steady.mu_ci95),
+        mu_native: r.native.as_ref().map(|c| c.steady.mu),
+        mu_native_ci95: r.native.as_ref().map(|c| c.steady.mu_ci95),
         ..base.clone()
     });
     contact.chain(shear).collect()

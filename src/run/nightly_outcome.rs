@@ -99,23 +99,9 @@ pub struct ContactRow {
 /// One code's steady-state and cost figures in a shear case.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CodeStats {
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub mu: f64,
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub mu_ci95: f64,
-    pub per_seed_mu: Vec<f64>,
-    /// Mean normal stress on the top plate over the steady window and seeds [Pa].
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub normal_stress: f64,
-    /// Mean rotational and translational kinetic energy over the steady window and seeds [J].
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub erot: f64,
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub ke: f64,
-    /// Mean fraction of touching particle pairs whose rolling resistance is at full
-    /// mobilisation over the steady window (native only; null for LIGGGHTS).
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub mobilised: f64,
+    /// mu (with CI and per seed), stress, E_rot, ke, mobilisation over the steady window.
+    #[serde(flatten)]
+    pub steady: crate::compare::Steady,
     /// Wall time summed over seeds [s] and mean throughput [particle-steps/s].
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub wall_s: f64,

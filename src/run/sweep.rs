@@ -8,7 +8,7 @@
 
 use super::shear::{ShearRequest, ShearSummary};
 pub use super::Engine;
-use crate::compare::{steady_window, window_figures};
+use crate::compare::{steady, steady_window, Steady};
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
 use crate::series::Series;
@@ -183,31 +183,17 @@ fn case_hash(case: &ShearCase, engine: Engine) -> Result<String> {
 }
 
 /// The input hash of a run: FNV-1a 64 of the case JSON, what runs it (`tag`: a sweep's
-/// engine, a convergence study's code) and the crate version, as 16 hex digits. A stored
-/// result is reused only when its hash matches.
+/// engine, a convergence study's code), the crate version and the outcome schema, as 16 hex
+/// digits. A stored result is reused only when its hash matches (a result of another schema
+/// is run again, never misread).
 pub fn run_input_hash(case: &ShearCase, tag: &str) -> Result<String> {
     let text = format!(
-        "{}|{tag}|{}",
+        "{}|{tag}|{}|{}",
         serde_json::to_string(case)?,
-        env!("CARGO_PKG_VERSION")
+        env!("CARGO_PKG_VERSION"),
+        super::SCHEMA
     );
     Ok(format!("{:016x}", fnv1a(text.as_bytes())))
-}
-
-/// One code's steady figures in one stage.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CodeStage {
-    /// Mean mu, normal stress [Pa] and rotational kinetic energy [J] over the stage's steady
-    /// window (its second half).
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub mu: f64,
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub normal_stress: f64,
-    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
-    pub erot: f64,
-    /// Fraction of touching pairs at full rolling mobilisation (native; NaN for LIGGGHTS).
-    #[serde(default)]
-    pub mobilised: Option<f64>,
 }
 
 /// Steady figures of one shear stage.
@@ -215,8 +201,9 @@ pub struct CodeStage {
 pub struct StageResult {
     pub speed: f64,
     pub window_steps: (u64, u64),
-    pub liggghts: Option<CodeStage>,
-    pub native: Option<CodeStage>,
+    /// Each code's figures over the stage's steady window (its second half), one seed.
+    pub liggghts: Option<Steady>,
+    pub native: Option<Steady>,
 }
 
 /// `runs/<id>/result.json`.
@@ -278,15 +265,7 @@ pub fn run_one(
     );
     let area = case.box_x * case.box_z;
     let stage = |s: &Option<Series>, w: (u64, u64)| {
-        s.as_ref().map(|s| {
-            let f = window_figures(s, w, area);
-            CodeStage {
-                mu: f.mu,
-                normal_stress: f.normal_stress,
-                erot: f.erot,
-                mobilised: Some(f.mobilised).filter(|m| m.is_finite()),
-            }
-        })
+        s.as_ref().map(|s| steady(std::slice::from_ref(s), w, area))
     };
     let stages = case
         .stages

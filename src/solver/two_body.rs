@@ -51,8 +51,7 @@ struct Body {
     integrate: bool,
 }
 
-struct Sim<'a> {
-    case: &'a Case,
+struct Sim {
     params: PairParams,
     nve: NveSphere,
     bodies: Vec<Body>,
@@ -87,8 +86,8 @@ pub fn run(case: &Case) -> Result<Vec<Frame>> {
     Ok(frames)
 }
 
-impl<'a> Sim<'a> {
-    fn new(case: &'a Case) -> Self {
+impl Sim {
+    fn new(case: &Case) -> Self {
         let rho = case.material.density;
         let bodies: Vec<Body> = case
             .particles
@@ -122,10 +121,11 @@ impl<'a> Sim<'a> {
             })
             .collect();
         let xhold = bodies.iter().map(|b| b.s.x).collect();
+        // the one time step, as in the shear box: nve's dtv, the kernels' copy set from it
+        let nve = NveSphere::new(case.dt);
         Sim {
-            case,
-            params: PairParams::new(&case.material, &case.models, case.dt),
-            nve: NveSphere::new(case.dt),
+            params: PairParams::new(&case.material, &case.models, nve.dtv),
+            nve,
             bodies,
             wall: case.wall.as_ref().map(|w| square_wall(w.z, w.half_size)),
             pair_hist: None,
@@ -170,7 +170,7 @@ impl<'a> Sim<'a> {
 
     fn advance(&mut self) -> Result<()> {
         self.step += 1;
-        let (step, dt) = (self.step, self.case.dt);
+        let (step, dt) = (self.step, self.nve.dtv);
         for b in &mut self.bodies {
             if b.integrate {
                 let s = &mut b.s;

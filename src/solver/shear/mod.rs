@@ -78,7 +78,11 @@ struct PairAux {
     sliding: bool,
 }
 
-/// The shear box state and time loop.
+/// The shear box state and time loop. The time step is read from `case.dt` once, in
+/// [`ShearSim::new`], into `nve` (fix nve/sphere's `dtv`, `dtf`, `dtfrotate`); every later
+/// use reads `nve.dtv`: the drift, the rotation, the bottom plate, the servo (which keeps
+/// none), and the contact kernels through `params.dt`, set from it (LIGGGHTS' models read
+/// `update->dt`).
 #[derive(Clone)]
 pub struct ShearSim {
     case: ShearCase,
@@ -152,10 +156,12 @@ impl ShearSim {
         ];
         let top_orig = meshes[1].tris.iter().map(|t| t.nodes).collect();
         let com = [0.5 * case.box_x, packing.top_y, 0.5 * case.box_z];
+        let nve = NveSphere::new(case.dt);
         ShearSim {
             case: case.clone(),
-            params: PairParams::new(&case.material, &case.models, case.dt),
-            nve: NveSphere::new(case.dt),
+            // the one time step: nve/sphere's dtv; the kernels' copy is set from it here
+            params: PairParams::new(&case.material, &case.models, nve.dtv),
+            nve,
             box_: Periodic {
                 lx: case.box_x,
                 lz: case.box_z,
@@ -183,7 +189,7 @@ impl ShearSim {
             bottom,
             top,
             top_base0: packing.top_y,
-            servo: Servo::new(&case.servo, case.target_force(), com, case.dt),
+            servo: Servo::new(&case.servo, case.target_force(), com),
             bottom_speed: 0.0,
             bottom_node_v: 0.0,
             shear_displacement: 0.0,
@@ -219,7 +225,7 @@ impl ShearSim {
     pub fn step(&mut self) -> Result<()> {
         self.step += 1;
         let nve = self.nve;
-        let dt = self.case.dt;
+        let dt = self.nve.dtv;
         let (radius, mass) = (&self.radius, &self.mass);
         self.x
             .par_iter_mut()
@@ -260,20 +266,20 @@ impl ShearSim {
         if self.implicit {
             self.implicit_rotation();
         }
-        self.servo.final_integrate(self.top_force);
+        self.servo.final_integrate(self.top_force, self.nve.dtv);
         Ok(())
     }
 
     /// The plates' initial_integrate: the servo moves the top plate, `move/mesh linear` the
     /// bottom one.
     fn move_plates(&mut self) {
-        let d = self.servo.initial_integrate();
+        let d = self.servo.initial_integrate(self.nve.dtv);
         self.top.base_y = self.top_base0 + d[1];
         self.meshes[1].place(&self.top_orig, d);
         self.bottom_node_v = self.bottom_speed;
         if self.bottom_speed != 0.0 {
             // MeshMoverLinear: nodes += vel * dt every step
-            let dx = self.bottom_speed * self.case.dt;
+            let dx = self.bottom_speed * self.nve.dtv;
             self.meshes[0].translate([dx, 0.0, 0.0]);
             self.bottom.offset_x += dx;
             self.shear_displacement += dx;

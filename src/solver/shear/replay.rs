@@ -101,7 +101,7 @@ impl ShearSim {
             self.mesh_rebuild_pending = self.plates_moved();
         }
         self.top_force = top_force;
-        self.servo.final_integrate(top_force);
+        self.servo.final_integrate(top_force, self.nve.dtv);
         Ok(())
     }
 

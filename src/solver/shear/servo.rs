@@ -1,4 +1,5 @@
 //! The top plate's servo: mesh_module_stress_servo.cpp in PID mode (`ctrlPV force`).
+//! It keeps no time step of its own: the simulation passes its one dt to every call.
 //!
 //! Set point `sp = -target_val`; process value `pv = f_total . axis` (force of the particles
 //! on the plate). With `axis = (0, -1, 0)` and a positive target the plate moves down until
@@ -20,7 +21,6 @@ pub struct Servo {
     pub kp: f64,
     pub ki: f64,
     pub kd: f64,
-    pub dt: f64,
     pub xcm: [f64; 3],
     pub xcm_orig: [f64; 3],
     pub vcm: [f64; 3],
@@ -29,7 +29,7 @@ pub struct Servo {
 }
 
 impl Servo {
-    pub fn new(spec: &ServoSpec, target_force: f64, com: [f64; 3], dt: f64) -> Self {
+    pub fn new(spec: &ServoSpec, target_force: f64, com: [f64; 3]) -> Self {
         let sp = -target_force;
         Servo {
             axis: [0.0, -1.0, 0.0],
@@ -39,7 +39,6 @@ impl Servo {
             kp: spec.kp,
             ki: spec.ki,
             kd: spec.kd,
-            dt,
             xcm: com,
             xcm_orig: com,
             vcm: [0.0; 3],
@@ -55,9 +54,9 @@ impl Servo {
 
     /// Moves the plate; returns the displacement since the servo was created (y component
     /// is what the top plate's base moved).
-    pub fn initial_integrate(&mut self) -> [f64; 3] {
+    pub fn initial_integrate(&mut self, dt: f64) -> [f64; 3] {
         for k in 0..3 {
-            let dx = self.dt * self.vcm[k];
+            let dx = dt * self.vcm[k];
             self.xcm[k] += dx;
         }
         [
@@ -68,12 +67,12 @@ impl Servo {
     }
 
     /// PID update from the total force of the particles on the plate.
-    pub fn final_integrate(&mut self, f_total: [f64; 3]) {
+    pub fn final_integrate(&mut self, f_total: [f64; 3], dt: f64) {
         let a = self.axis;
         let pv = f_total[0] * a[0] + f_total[1] * a[1] + f_total[2] * a[2];
         let err = self.sp - pv;
-        self.sum_err += err * self.dt;
-        let dfdt = -(pv - self.old_pv) / self.dt;
+        self.sum_err += err * dt;
+        let dfdt = -(pv - self.old_pv) / dt;
         let mag =
             -self.vel_max * (err * self.kp + self.sum_err * self.ki + dfdt * self.kd) * self.sp_inv;
         self.vcm = [a[0] * mag, a[1] * mag, a[2] * mag];
@@ -110,15 +109,16 @@ mod tests {
             ki: 0.0,
             kd: 0.0,
         };
-        let mut s = Servo::new(&spec, 100.0, [0.0, 1.0, 0.0], 1e-3);
-        s.final_integrate([0.0, 0.0, 0.0]); // no force: full error
+        let mut s = Servo::new(&spec, 100.0, [0.0, 1.0, 0.0]);
+        let dt = 1e-3;
+        s.final_integrate([0.0, 0.0, 0.0], dt); // no force: full error
         assert!((s.vcm[1] + 0.5).abs() < 1e-15, "{:?}", s.vcm);
-        s.final_integrate([0.0, 300.0, 0.0]); // 3x the target: move up, limited
+        s.final_integrate([0.0, 300.0, 0.0], dt); // 3x the target: move up, limited
         assert!(s.vcm[1] > 0.0 && s.vcm[1] <= 1.0);
-        s.final_integrate([0.0, 100.0, 0.0]);
+        s.final_integrate([0.0, 100.0, 0.0], dt);
         assert_eq!(s.vcm[1], 0.0);
         s.vcm = [0.0, -0.5, 0.0];
-        let d = s.initial_integrate();
+        let d = s.initial_integrate(dt);
         assert!((d[1] + 0.5e-3).abs() < 1e-15);
     }
 }
