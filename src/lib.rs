@@ -14,6 +14,7 @@ pub mod error;
 pub mod fsutil;
 pub mod liggghts;
 pub mod packing;
+pub mod profile;
 pub mod report;
 pub mod run;
 pub mod series;

@@ -257,6 +257,68 @@ pub fn read_contact_frames(dir: &Path, n_hist: usize, is_wall: bool) -> Result<V
     Ok(frames)
 }
 
+/// A parse error of a LIGGGHTS output file.
+pub fn parse_err(path: &Path, msg: impl Into<String>) -> Error {
+    Error::Parse {
+        path: path.to_path_buf(),
+        msg: msg.into(),
+    }
+}
+
+/// Rows of a LIGGGHTS dump after its `ITEM: ATOMS` / `ITEM: ENTRIES` header, checking the
+/// step, the row count and that every row has `ncol` numbers.
+pub fn dump_rows(path: &Path, step: u64, ncol: usize) -> Result<Vec<Vec<f64>>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut lines = text.lines();
+    let mut count: Option<usize> = None;
+    let mut got_step = None;
+    while let Some(l) = lines.next() {
+        if l.starts_with("ITEM: TIMESTEP") {
+            got_step = lines.next().and_then(|s| s.trim().parse::<u64>().ok());
+        } else if l.starts_with("ITEM: NUMBER OF") {
+            count = lines.next().and_then(|s| s.trim().parse::<usize>().ok());
+        } else if l.starts_with("ITEM: ATOMS") || l.starts_with("ITEM: ENTRIES") {
+            let cols = l.split_whitespace().count() - 2;
+            if cols != ncol {
+                return Err(parse_err(
+                    path,
+                    format!("{cols} columns, expected {ncol} (a history layout from another rolling model?)"),
+                ));
+            }
+            break;
+        }
+    }
+    if got_step != Some(step) {
+        return Err(parse_err(
+            path,
+            format!("timestep {got_step:?}, expected {step}"),
+        ));
+    }
+    let count = count.ok_or_else(|| parse_err(path, "no NUMBER OF ATOMS/ENTRIES"))?;
+    let mut rows = Vec::with_capacity(count);
+    for (k, l) in lines.enumerate() {
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .map(|t| t.parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| parse_err(path, format!("row {}: {e}", k + 1)))?;
+        if v.len() != ncol {
+            return Err(parse_err(
+                path,
+                format!("row {} has {} values, expected {ncol}", k + 1, v.len()),
+            ));
+        }
+        rows.push(v);
+    }
+    if rows.len() != count {
+        return Err(parse_err(
+            path,
+            format!("{} rows, header says {count}", rows.len()),
+        ));
+    }
+    Ok(rows)
+}
+
 /// Thermo rows of a LIGGGHTS log: (step, values) for every row with `ncol` values after the
 /// step, keeping the first row of each step (a new `run` repeats the last step, with the
 /// mesh force accumulated twice during setup).

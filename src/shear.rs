@@ -1,11 +1,12 @@
 //! The shear experiment in both codes from one case and one initial packing: runs, progress,
 //! and the common time series (plate forces, mu, height, kinetic energies).
 
-use crate::deck::shear::{shear_deck, SNAPSHOT_PREFIX, THERMO_COLUMNS};
+use crate::deck::shear::{shear_deck, PROFILE_PREFIX, SNAPSHOT_PREFIX, THERMO_COLUMNS};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::liggghts::{last_thermo_step, read_thermo, Liggghts, LOG_NAME};
+use crate::liggghts::{dump_rows, last_thermo_step, parse_err, read_thermo, Liggghts, LOG_NAME};
 use crate::packing::Packing;
+use crate::profile::{is_sample, profiles, schedule, ProfileSample, VelocityProfile};
 use crate::report::progress::Progress;
 use crate::report::vtk;
 use crate::series::Series;
@@ -100,6 +101,8 @@ pub struct CodeRun {
     pub steps: u64,
     /// Native runs: the state at the end of compression.
     pub compacted: Option<Packing>,
+    /// The steady velocity profile of each stage ([`crate::profile`]).
+    pub profiles: Vec<VelocityProfile>,
 }
 
 impl CodeRun {
@@ -107,15 +110,6 @@ impl CodeRun {
     pub fn throughput(&self, particles: usize) -> f64 {
         self.steps as f64 * particles as f64 / self.wall_time.max(1e-9)
     }
-}
-
-/// Step at which each run (compression, stage 1, ...) ends.
-pub fn run_ends(case: &ShearCase) -> Vec<u64> {
-    let mut ends = vec![case.compression_steps];
-    for s in case.stage_steps() {
-        ends.push(ends.last().unwrap() + s);
-    }
-    ends
 }
 
 /// Bottom plate displacement along x at `step` [m] (0 during compression).
@@ -135,7 +129,7 @@ pub fn displacement(case: &ShearCase, step: u64) -> f64 {
 
 /// Index of the stage `step` belongs to (None during compression).
 pub fn stage_of(case: &ShearCase, step: u64) -> Option<usize> {
-    let ends = run_ends(case);
+    let ends = case.run_ends();
     (1..ends.len())
         .find(|&k| step > ends[k - 1] && step <= ends[k])
         .map(|k| k - 1)
@@ -158,9 +152,11 @@ pub fn run_native(
 ) -> Result<CodeRun> {
     let t0 = Instant::now();
     let mut sim = ShearSim::new(case, packing);
-    let ends = run_ends(case);
+    let ends = case.run_ends();
     let mut rows = Vec::new();
     let mut compacted = None;
+    let mut profile = Vec::new();
+    let windows = schedule(case);
     let rec = |sim: &ShearSim| Row::from(&sim.record());
     let result = (|| -> Result<()> {
         sim.setup(0.0)?;
@@ -182,6 +178,14 @@ pub fn run_native(
                     }
                     rows.push(rec(&sim));
                     progress.set(sim.step);
+                }
+                if is_sample(&windows, sim.step) {
+                    profile.push(ProfileSample {
+                        step: sim.step,
+                        top_y: sim.record().top_y,
+                        y: sim.x.iter().map(|x| x[1]).collect(),
+                        vx: sim.v.iter().map(|v| v[0]).collect(),
+                    });
                 }
                 if case.snapshot_every > 0 && sim.step.is_multiple_of(case.snapshot_every) {
                     vtk::write_snapshot(
@@ -206,6 +210,7 @@ pub fn run_native(
         wall_time: t0.elapsed().as_secs_f64(),
         steps: sim.step,
         compacted,
+        profiles: profiles(case, &profile)?,
     })
 }
 
@@ -263,12 +268,64 @@ pub fn run_liggghts(
     if case.snapshot_every > 0 {
         vtk::convert_liggghts_snapshots(&dir, SNAPSHOT_PREFIX, &out.join("vtk"))?;
     }
+    let samples = read_profile_dumps(case, &dir, &rows, packing.radius.len())?;
     Ok(CodeRun {
         rows,
         wall_time: wall,
         steps: case.total_steps(),
         compacted: None,
+        profiles: profiles(case, &samples)?,
     })
+}
+
+/// LIGGGHTS' velocity-profile dumps (`id y vx` at every step of the schedule), with the top
+/// plate's position from the thermo row of the same step.
+fn read_profile_dumps(
+    case: &ShearCase,
+    dir: &Path,
+    rows: &[Row],
+    atoms: usize,
+) -> Result<Vec<ProfileSample>> {
+    let mut out = Vec::new();
+    for w in schedule(case) {
+        for step in w.steps() {
+            let path = dir.join(format!("{PROFILE_PREFIX}{step}.dump"));
+            let d = dump_rows(&path, step, 3)?;
+            if d.len() != atoms {
+                return Err(parse_err(
+                    &path,
+                    format!("{} atoms, the case has {atoms}", d.len()),
+                ));
+            }
+            if let Some(k) = d
+                .iter()
+                .enumerate()
+                .position(|(k, r)| r[0] as usize != k + 1)
+            {
+                return Err(parse_err(
+                    &path,
+                    format!(
+                        "row {} holds atom id {}, expected {}",
+                        k + 1,
+                        d[k][0],
+                        k + 1
+                    ),
+                ));
+            }
+            let top_y = rows
+                .iter()
+                .find(|r| r.step == step)
+                .map(|r| r.top_y)
+                .ok_or_else(|| parse_err(&path, format!("no thermo row at step {step}")))?;
+            out.push(ProfileSample {
+                step,
+                top_y,
+                y: d.iter().map(|r| r[1]).collect(),
+                vx: d.iter().map(|r| r[2]).collect(),
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// The common series of a shear run. Sign convention: forces are those the particles exert on
@@ -363,7 +420,7 @@ mod tests {
             },
         ];
         let n = c.stage_steps();
-        let ends = run_ends(&c);
+        let ends = c.run_ends();
         assert_eq!(displacement(&c, c.compression_steps), 0.0);
         let d1 = displacement(&c, ends[1]);
         assert!((d1 - 0.01 * c.dt * n[0] as f64).abs() < 1e-15);

@@ -125,7 +125,15 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
     assert_eq!(s.shear.len(), 5);
     for r in &s.shear {
         for (code, st) in [("liggghts", &r.liggghts), ("native", &r.native)] {
-            let st = &st.as_ref().unwrap().steady;
+            let stats = st.as_ref().unwrap();
+            // the plates' grip of the last stage, from the code's own particles
+            let p = stats.profile.as_ref().unwrap();
+            assert!(
+                p.layers[0].u > p.layers.last().unwrap().u,
+                "{} {code}: {p:?}",
+                r.name
+            );
+            let st = &stats.steady;
             assert!(
                 (0.1..0.9).contains(&st.mu),
                 "{} {code}: mu {}",
@@ -172,8 +180,8 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
         "self-contained: no network resources"
     );
     let expected = body_attr(&html, "data-plots-expected").unwrap();
-    // 1 bar chart + 2 trend plots + 5 per shear case + 2 per contact run
-    assert_eq!(expected, 1 + 2 + 5 * 5 + 23 * 2);
+    // 1 bar chart + 2 trend plots + 6 per shear case + 2 per contact run
+    assert_eq!(expected, 1 + 2 + 5 * 6 + 23 * 2);
     let dom = browse(&root.join("profile-dom"), &report, &["--dump-dom"]);
     assert!(dom.status.success(), "{}", text(&dom));
     let dom_text = String::from_utf8_lossy(&dom.stdout);

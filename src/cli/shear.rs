@@ -65,8 +65,8 @@ pub struct ShearArgs {
     /// Particle count (the preset's box is scaled in x and z to keep the sample height).
     #[arg(long)]
     pub particles: Option<usize>,
-    /// Coefficient of normal restitution (the paper's Table 2: 1, no normal damping; the
-    /// presets still use 0.5). LIGGGHTS accepts 0.05 < e <= 1.
+    /// Coefficient of normal restitution (the presets use the paper's Table 2: 1, no normal
+    /// damping). LIGGGHTS accepts 0.05 < e <= 1.
     #[arg(long)]
     pub restitution: Option<f64>,
     /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (their 95 % CIs must

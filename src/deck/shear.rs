@@ -12,6 +12,8 @@ use std::fmt::Write;
 pub const BOTTOM_STL: &str = "bottom.stl";
 pub const TOP_STL: &str = "top.stl";
 pub const SNAPSHOT_PREFIX: &str = "snap_";
+/// Velocity-profile samples ([`crate::profile::deck_dumps`]).
+pub const PROFILE_PREFIX: &str = "prof_";
 
 /// Thermo columns after `Step`, in this order, parsed by [`crate::liggghts::read_thermo`].
 pub const THERMO_COLUMNS: [&str; 10] = [
@@ -202,6 +204,10 @@ pub fn shear_deck_with(case: &ShearCase, packing: &Packing, extras: &DeckExtras)
         .unwrap();
         writeln!(w, "dump_modify snap sort id").unwrap();
     }
+    w.push_str(&crate::profile::deck_dumps(
+        &crate::profile::schedule(case),
+        PROFILE_PREFIX,
+    ));
     w.push_str(&extras.before_runs);
     let end = extras.end_step.unwrap_or(u64::MAX);
     writeln!(w, "# compression by the servo").unwrap();

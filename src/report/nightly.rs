@@ -373,6 +373,21 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
                     },
                     "num",
                 ),
+                (
+                    c.profile
+                        .as_ref()
+                        .map(|p| {
+                            format!(
+                                "{:.1} % / {:.1} %, band {:.2} of {:.2} mm",
+                                100.0 * p.slip_bottom,
+                                100.0 * p.slip_top,
+                                1e3 * p.band_width,
+                                1e3 * p.gap
+                            )
+                        })
+                        .unwrap_or("–".into()),
+                    "num",
+                ),
                 (format!("{:.0}", c.wall_s), "num"),
             ]);
         }
@@ -386,6 +401,7 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
             "mean E_rot [J]",
             "mean E_kin [J]",
             "rolling mobilised",
+            "slip bottom / top plate",
             "wall [s]",
         ],
         &rows,
@@ -415,6 +431,10 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
     let mut figs = Vec::new();
     for (f, cap) in [
         ("mu_strain.svg", "μ(strain), both codes, every seed"),
+        (
+            "velocity_profile.svg",
+            "steady velocity profile across the gouge: does the gouge slip at the plates?",
+        ),
         ("shear_force.svg", "shear force on the top plate"),
         ("top_force.svg", "normal force on the top plate"),
         ("kinetic_energy.svg", "rotational kinetic energy"),

@@ -2,6 +2,7 @@
 //! energy, each seed faint with its running mean on top, one legend entry per code.
 
 use crate::error::Result;
+use crate::profile::VelocityProfile;
 use crate::report::plot::{decimate, line_plot, running_mean, Curve, CurveData};
 use crate::series::Series;
 use std::path::Path;
@@ -110,4 +111,46 @@ pub fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
         line_plot(&out.join(file), title, xd, yd, &cs)?;
     }
     Ok(())
+}
+
+/// The steady velocity profile of every stage (mean over seeds): v_x / V against the
+/// normalised height across the gouge, with the grains' spread as bars; `velocity_profile.svg`.
+pub fn profile_plot(out: &Path, lig: &[VelocityProfile], nat: &[VelocityProfile]) -> Result<()> {
+    // (label, colour, (xi, u) per layer, spread per layer)
+    type ProfileCurve = (String, usize, Vec<(f64, f64)>, Vec<f64>);
+    let mut data: Vec<ProfileCurve> = Vec::new();
+    for (code, color, profiles) in [("LIGGGHTS", 0usize, lig), ("native", 1, nat)] {
+        for p in profiles {
+            data.push((
+                format!(
+                    "{code} stage {} ({} m/s): slip {:.0} % / {:.0} %",
+                    p.stage + 1,
+                    p.speed,
+                    100.0 * p.slip_bottom,
+                    100.0 * p.slip_top
+                ),
+                color,
+                p.layers.iter().map(|l| (l.xi, l.u)).collect(),
+                p.layers.iter().map(|l| l.u_spread).collect(),
+            ));
+        }
+    }
+    if data.is_empty() {
+        return Ok(());
+    }
+    let curves: Vec<Curve> = data
+        .iter()
+        .map(|(label, c, pts, err)| {
+            let mut cv = Curve::new(label, pts, *c);
+            cv.err = Some(err);
+            cv
+        })
+        .collect();
+    line_plot(
+        &out.join("velocity_profile.svg"),
+        "steady velocity profile across the gouge (bars: spread of the grains)",
+        "height between the tooth tips (0 bottom plate, 1 top plate)",
+        "v_x / bottom plate speed",
+        &curves,
+    )
 }

@@ -12,7 +12,7 @@ use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
 use crate::report::progress::Progress;
 use crate::series::Series;
-use crate::shear::{run_ends, run_liggghts, run_native, write_series};
+use crate::shear::{run_liggghts, run_native, write_series};
 use crate::solver::shear::compact;
 use crate::spec::shear::ShearCase;
 use crate::spec::stability_shear::stability;
@@ -177,7 +177,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     let mut points = Vec::new();
     for (code, f, series) in &per {
         let mut c = at_factor(&case0, *f)?;
-        let ends = run_ends(&c);
+        let ends = c.run_ends();
         let window = steady_window(ends[ends.len() - 2], ends[ends.len() - 1]);
         let st = steady(series, window, c.box_x * c.box_z);
         if *code == StudyCode::Implicit {

@@ -381,9 +381,9 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary) -> Result<()> {
         lock(&|r| r.shear_chaos_baseline.as_ref().map(|h| h.last_agree_step))
             .and_then(|v| v.into_iter().min());
     for code in Code::BOTH {
-        let (st, slot) = match code {
-            Code::Liggghts => (&s.liggghts, &mut row.liggghts),
-            Code::Native => (&s.native, &mut row.native),
+        let (st, slot, profiles) = match code {
+            Code::Liggghts => (&s.liggghts, &mut row.liggghts, &s.profiles.liggghts),
+            Code::Native => (&s.native, &mut row.native, &s.profiles.native),
         };
         let Some(st) = st else { continue };
         if st.per_seed_mu.len() != s.seeds.len() {
@@ -406,6 +406,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary) -> Result<()> {
             .unzip();
         *slot = Some(CodeStats {
             steady: st.clone(),
+            profile: profiles.last().cloned(),
             wall_s: wall.iter().sum(),
             particle_steps_per_s: thr.iter().sum::<f64>() / thr.len().max(1) as f64,
         });

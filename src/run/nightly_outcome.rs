@@ -102,6 +102,8 @@ pub struct CodeStats {
     /// mu (with CI and per seed), stress, E_rot, ke, mobilisation over the steady window.
     #[serde(flatten)]
     pub steady: crate::compare::Steady,
+    /// The steady velocity profile of the last stage, mean over seeds (slip, band width).
+    pub profile: Option<crate::profile::VelocityProfile>,
     /// Wall time summed over seeds [s] and mean throughput [particle-steps/s].
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub wall_s: f64,

@@ -12,7 +12,6 @@ use crate::compare::{steady, steady_window, Steady};
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
 use crate::series::Series;
-use crate::shear::run_ends;
 use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::stability_shear::stability;
 use crate::spec::RollingModel;
@@ -257,7 +256,7 @@ pub fn run_one(
         ));
     }
     let summary: ShearSummary = super::shear::run_cases(&req, vec![(case.clone(), warnings)])?;
-    let ends = run_ends(&case);
+    let ends = case.run_ends();
     // the study's series in memory (one seed; none for a code that did not run)
     let (ls, ns): (Option<Series>, Option<Series>) = (
         summary.series.liggghts.first().cloned(),

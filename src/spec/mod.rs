@@ -7,6 +7,7 @@
 //! names are identifiers, every number is finite and in range.
 
 mod builtin;
+pub mod paper_table;
 pub mod shear;
 mod stability;
 pub mod stability_shear;

@@ -234,7 +234,8 @@ impl ShearCase {
             youngs_modulus: 70e9,
             poisson_ratio: 0.3,
             density: 2e6,
-            restitution: 0.5,
+            // Table 2: e = 1, no normal damping
+            restitution: 1.0,
             friction: 0.5,
             rolling_friction: mu_r,
             rolling_damping: eta_r,
@@ -467,6 +468,15 @@ impl ShearCase {
             .iter()
             .map(|s| (s.strain * h / s.speed / self.dt).ceil() as u64)
             .collect()
+    }
+
+    /// Step at which each run (compression, stage 1, ...) ends.
+    pub fn run_ends(&self) -> Vec<u64> {
+        let mut ends = vec![self.compression_steps];
+        for s in self.stage_steps() {
+            ends.push(ends.last().unwrap() + s);
+        }
+        ends
     }
 
     pub fn total_steps(&self) -> u64 {

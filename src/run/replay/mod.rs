@@ -117,7 +117,7 @@ pub fn default_states(case: &ShearCase, n: usize, k: u64, shear_span: u64) -> Ve
 /// Checks the window starts: increasing, disjoint, inside the run, not at a run boundary.
 pub fn check_states(case: &ShearCase, states: &[u64], k: u64) -> Result<()> {
     let k = k + REPLAY_NEIGHBOR_EVERY;
-    let ends = crate::shear::run_ends(case);
+    let ends = case.run_ends();
     let total = *ends.last().unwrap_or(&0);
     if states.is_empty() || k == 0 {
         return Err(Error::invalid(
@@ -197,7 +197,7 @@ pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Resu
     };
     let mut sim = ShearSim::new(&case, &packing);
     let ntri = sim.triangle_counts();
-    let ends = crate::shear::run_ends(&case);
+    let ends = case.run_ends();
     let mut results = Vec::new();
     let mut run_start = 0u64;
     let mut wi = 0usize;

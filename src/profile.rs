@@ -1,0 +1,492 @@
+//! The plates' grip: the steady velocity profile v_x(y) across the gouge, the slip at each
+//! plate and the width of the shear band, from particle samples that both codes write at the
+//! same steps ([`schedule`]): LIGGGHTS as dumps (`id y vx`, 17 digits), the native solver in
+//! memory. One function ([`profile`]) bins both.
+//!
+//! Definitions (one stage, its steady window):
+//! - the gouge spans the tooth tips: from `y_lo = tooth_height` above the bottom plate's base
+//!   (at y = 0) to `y_hi = top_y - tooth_height`; grains between the teeth (below `y_lo` or
+//!   above `y_hi`) belong to the plates and are not binned;
+//! - layers: `n = max(4, round(gap / d_mean))` equal slices of the normalised height
+//!   `xi = (y - y_lo) / (y_hi - y_lo)`, `gap` the mean tip-to-tip distance over the samples and
+//!   `d_mean` the number-weighted mean diameter; each layer holds the mean and the standard
+//!   deviation (over grains and samples) of `u = v_x / V`, V the bottom plate's speed (the top
+//!   plate does not move along x);
+//! - slip: the plate's speed minus the gouge's at the tooth tips, as a fraction of V (0: the
+//!   gouge moves with the plate), the gouge's speed there extrapolated linearly from the two
+//!   layers next to the plate (`u_0 + (u_0 - u_1) / 2`; a layer's mean alone would read
+//!   `1 / (2 n)` of slip from a uniform shear that grips): `1 - u(0)` at the bottom plate,
+//!   `u(1)` at the top one;
+//! - shear-band width: `(gap / n) / max_k (u_k - u_{k+1})`, the thickness over which the whole
+//!   plate speed would be lost at the steepest layer-to-layer gradient: the gap for uniform
+//!   shear without slip, less when the shear localises.
+
+use crate::compare::{mean_ci95, steady_window};
+use crate::error::{Error, Result};
+use crate::spec::shear::ShearCase;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write;
+
+/// Samples per stage, evenly spaced over its steady window.
+pub const SAMPLES_PER_STAGE: u64 = 20;
+
+/// The codes' slips at a plate agree when their difference is within the two CIs summed:
+/// |a - b| / (ci_a + ci_b) at most this (NaN, a comparison of nothing, fails).
+pub const SLIP_CI_LIMIT: f64 = 1.0;
+
+/// The sample steps of one stage: `first + every k` for k = 0 .. samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SampleWindow {
+    pub stage: usize,
+    pub first: u64,
+    pub every: u64,
+    pub samples: u64,
+}
+
+impl SampleWindow {
+    pub fn steps(&self) -> impl Iterator<Item = u64> + '_ {
+        (0..self.samples).map(|k| self.first + k * self.every)
+    }
+
+    pub fn last(&self) -> u64 {
+        self.first + (self.samples - 1) * self.every
+    }
+}
+
+/// Where both codes sample: per stage, up to [`SAMPLES_PER_STAGE`] output steps (multiples of
+/// `output_every`, where both codes record the top plate's position) evenly spaced over its
+/// steady window, the last at or just before the stage's end.
+pub fn schedule(case: &ShearCase) -> Vec<SampleWindow> {
+    let ends = case.run_ends();
+    let out = case.output_every;
+    (1..ends.len())
+        .filter_map(|k| {
+            let (a, b) = steady_window(ends[k - 1], ends[k]);
+            let last = b / out * out;
+            let span = last.checked_sub(a)?;
+            let every = (span / SAMPLES_PER_STAGE / out).max(1) * out;
+            let samples = (span.saturating_sub(1) / every + 1).min(SAMPLES_PER_STAGE);
+            (last > a).then_some(SampleWindow {
+                stage: k - 1,
+                first: last - (samples - 1) * every,
+                every,
+                samples,
+            })
+        })
+        .collect()
+}
+
+/// Whether `step` is a sample step of the schedule.
+pub fn is_sample(windows: &[SampleWindow], step: u64) -> bool {
+    windows
+        .iter()
+        .any(|w| step >= w.first && step <= w.last() && (step - w.first).is_multiple_of(w.every))
+}
+
+/// Heights and shear velocities of every grain at one step, and where the top plate's base was.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProfileSample {
+    pub step: u64,
+    pub top_y: f64,
+    pub y: Vec<f64>,
+    pub vx: Vec<f64>,
+}
+
+/// One layer of the profile.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Layer {
+    /// Centre of the layer in normalised height (0: bottom tooth tips, 1: top tooth tips).
+    pub xi: f64,
+    /// Mean and standard deviation of v_x / V over the layer's grains and samples (NaN when
+    /// the layer held no grain).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub u: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub u_spread: f64,
+    /// 95 % CI half-width of `u`: over seeds for a mean over seeds, else over the samples
+    /// (each sample's layer mean one value, as the block means of the steady mu).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub u_ci95: f64,
+    /// Mean number of grains in the layer per sample.
+    pub grains: f64,
+}
+
+/// The steady velocity profile of one stage of one run (or the mean over seeds).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VelocityProfile {
+    pub stage: usize,
+    /// Bottom plate speed V [m/s].
+    pub speed: f64,
+    pub samples: usize,
+    /// Mean tip-to-tip gap [m].
+    pub gap: f64,
+    pub layers: Vec<Layer>,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub slip_bottom: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub slip_top: f64,
+    /// 95 % CI half-widths of the slips, from the CIs of the two layers they come from.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub slip_bottom_ci95: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub slip_top_ci95: f64,
+    /// [m]; NaN when no layer moves faster than the one above it.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
+    pub band_width: f64,
+}
+
+impl VelocityProfile {
+    fn finish(mut self) -> Self {
+        let n = self.layers.len();
+        let u = |k: usize| self.layers[k].u;
+        self.slip_bottom = 1.0 - (u(0) + 0.5 * (u(0) - u(1)));
+        self.slip_top = u(n - 1) + 0.5 * (u(n - 1) - u(n - 2));
+        let ci = |k: usize| self.layers[k].u_ci95;
+        let extrapolated_ci = |a: f64, b: f64| (2.25 * a * a + 0.25 * b * b).sqrt();
+        self.slip_bottom_ci95 = extrapolated_ci(ci(0), ci(1));
+        self.slip_top_ci95 = extrapolated_ci(ci(n - 1), ci(n - 2));
+        let steepest = (0..n - 1).map(|k| u(k) - u(k + 1)).fold(f64::NAN, f64::max);
+        self.band_width = if steepest > 0.0 {
+            self.gap / n as f64 / steepest
+        } else {
+            f64::NAN
+        };
+        self
+    }
+
+    /// The layer-by-layer mean of profiles of the same stage (seeds), with their slips and
+    /// width recomputed from it; None without profiles or when their layers differ.
+    pub fn mean(profiles: &[&VelocityProfile]) -> Option<VelocityProfile> {
+        let first = profiles.first()?;
+        let n = first.layers.len();
+        if profiles.iter().any(|p| p.layers.len() != n) {
+            return None;
+        }
+        let m = profiles.len() as f64;
+        let avg =
+            |f: &dyn Fn(&VelocityProfile) -> f64| profiles.iter().map(|p| f(p)).sum::<f64>() / m;
+        let layers = (0..n)
+            .map(|k| {
+                let (u, ci) =
+                    mean_ci95(&profiles.iter().map(|p| p.layers[k].u).collect::<Vec<_>>());
+                Layer {
+                    xi: first.layers[k].xi,
+                    u,
+                    u_spread: avg(&|p| p.layers[k].u_spread),
+                    u_ci95: if profiles.len() == 1 {
+                        first.layers[k].u_ci95
+                    } else {
+                        ci
+                    },
+                    grains: avg(&|p| p.layers[k].grains),
+                }
+            })
+            .collect();
+        Some(
+            VelocityProfile {
+                stage: first.stage,
+                speed: first.speed,
+                samples: profiles.iter().map(|p| p.samples).sum(),
+                gap: avg(&|p| p.gap),
+                layers,
+                slip_bottom: f64::NAN,
+                slip_top: f64::NAN,
+                slip_bottom_ci95: f64::NAN,
+                slip_top_ci95: f64::NAN,
+                band_width: f64::NAN,
+            }
+            .finish(),
+        )
+    }
+}
+
+/// The steady profile of one stage from its samples (see the module's definitions).
+pub fn profile(
+    case: &ShearCase,
+    window: &SampleWindow,
+    samples: &[&ProfileSample],
+) -> Result<VelocityProfile> {
+    let stage = &case.stages[window.stage];
+    if samples.is_empty() {
+        return Err(Error::Missing {
+            what: format!("velocity-profile samples of stage {}", window.stage + 1),
+            dir: std::path::PathBuf::from(&case.name),
+        });
+    }
+    let t = case.plates.tooth_height();
+    let gaps: Vec<f64> = samples.iter().map(|s| s.top_y - 2.0 * t).collect();
+    let gap = gaps.iter().sum::<f64>() / gaps.len() as f64;
+    let d = 2.0 * case.mean_radius();
+    let n = ((gap / d).round() as usize).max(4);
+    let (mut sum, mut sum2, mut count) = (vec![0.0; n], vec![0.0; n], vec![0usize; n]);
+    // each sample's layer means, for the CI
+    let mut per_sample: Vec<Vec<f64>> = vec![Vec::new(); n];
+    for (s, g) in samples.iter().zip(&gaps) {
+        let (mut ss, mut sc) = (vec![0.0; n], vec![0usize; n]);
+        for (y, vx) in s.y.iter().zip(&s.vx) {
+            let xi = (y - t) / g;
+            if (0.0..1.0).contains(&xi) {
+                let k = ((xi * n as f64) as usize).min(n - 1);
+                let u = vx / stage.speed;
+                sum[k] += u;
+                sum2[k] += u * u;
+                count[k] += 1;
+                ss[k] += u;
+                sc[k] += 1;
+            }
+        }
+        for k in (0..n).filter(|&k| sc[k] > 0) {
+            per_sample[k].push(ss[k] / sc[k] as f64);
+        }
+    }
+    let layers = (0..n)
+        .map(|k| {
+            let c = count[k] as f64;
+            let u = sum[k] / c;
+            Layer {
+                xi: (k as f64 + 0.5) / n as f64,
+                u,
+                u_spread: (sum2[k] / c - u * u).max(0.0).sqrt(),
+                u_ci95: mean_ci95(&per_sample[k]).1,
+                grains: c / samples.len() as f64,
+            }
+        })
+        .collect();
+    Ok(VelocityProfile {
+        stage: window.stage,
+        speed: stage.speed,
+        samples: samples.len(),
+        gap,
+        layers,
+        slip_bottom: f64::NAN,
+        slip_top: f64::NAN,
+        slip_bottom_ci95: f64::NAN,
+        slip_top_ci95: f64::NAN,
+        band_width: f64::NAN,
+    }
+    .finish())
+}
+
+/// The profile of every stage from one run's samples.
+pub fn profiles(case: &ShearCase, samples: &[ProfileSample]) -> Result<Vec<VelocityProfile>> {
+    schedule(case)
+        .iter()
+        .map(|w| {
+            let mine: Vec<&ProfileSample> = samples
+                .iter()
+                .filter(|s| s.step >= w.first && s.step <= w.last())
+                .collect();
+            if mine.len() as u64 != w.samples {
+                return Err(Error::Missing {
+                    what: format!(
+                        "velocity-profile samples of stage {}: {} of {}",
+                        w.stage + 1,
+                        mine.len(),
+                        w.samples
+                    ),
+                    dir: std::path::PathBuf::from(&case.name),
+                });
+            }
+            profile(case, w, &mine)
+        })
+        .collect()
+}
+
+/// The profiles as CSV: one row per stage and layer.
+pub fn csv(profiles: &[VelocityProfile]) -> String {
+    let mut s = String::from("stage,speed[m/s],xi[-],u[-],u_spread[-],grains[-],u_ci95[-],slip_bottom[-],slip_bottom_ci95[-],slip_top[-],slip_top_ci95[-],band_width[m]\n");
+    for p in profiles {
+        for l in &p.layers {
+            writeln!(
+                s,
+                "{},{},{:.6},{:.17e},{:.17e},{:.3},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e},{:.17e}",
+                p.stage + 1,
+                p.speed,
+                l.xi,
+                l.u,
+                l.u_spread,
+                l.grains,
+                l.u_ci95,
+                p.slip_bottom,
+                p.slip_bottom_ci95,
+                p.slip_top,
+                p.slip_top_ci95,
+                p.band_width
+            )
+            .unwrap();
+        }
+    }
+    s
+}
+
+/// The deck commands that dump `id y vx` at the schedule's steps: an equal-style variable
+/// gives the next sample step (`dump_modify every v_pnext`), per window
+/// `max(first, first + every (floor((step - first) / every) + 1))`, `max(a, b)` written as
+/// `(a + b + |a - b|) / 2` as in the replay's dumps.
+pub fn deck_dumps(windows: &[SampleWindow], prefix: &str) -> String {
+    let max2 = |a: &str, b: &str| format!("(({a})+({b})+abs(({a})-({b})))/2");
+    let mut terms = Vec::new();
+    let mut prev_end: Option<u64> = None;
+    for w in windows {
+        let lo = prev_end
+            .map(|p| format!("(step>={p})*"))
+            .unwrap_or_default();
+        let next = format!(
+            "{}+{}*(floor((step-{})/{})+1)",
+            w.first, w.every, w.first, w.every
+        );
+        terms.push(format!(
+            "{lo}(step<{})*{}",
+            w.last(),
+            max2(&w.first.to_string(), &next)
+        ));
+        prev_end = Some(w.last());
+    }
+    if let Some(p) = prev_end {
+        terms.push(format!("(step>={p})*1e15"));
+    }
+    let mut d = String::new();
+    writeln!(d, "# velocity-profile samples").unwrap();
+    writeln!(d, "variable pnext equal \"{}\"", terms.join("+")).unwrap();
+    writeln!(d, "dump prof all custom 1 {prefix}*.dump id y vx").unwrap();
+    writeln!(
+        d,
+        "dump_modify prof every v_pnext sort id format \"%d %.17g %.17g\""
+    )
+    .unwrap();
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::shear::Preset;
+    use crate::spec::RollingModel;
+
+    fn case() -> ShearCase {
+        ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.0, 0.0, 1).unwrap()
+    }
+
+    #[test]
+    fn schedule_samples_the_steady_window() {
+        let c = case();
+        let ends = c.run_ends();
+        let w = schedule(&c);
+        assert_eq!(w.len(), c.stages.len());
+        let (a, b) = steady_window(ends[0], ends[1]);
+        assert!(
+            w[0].last() <= b && b - w[0].last() < c.output_every,
+            "{w:?}"
+        );
+        assert!(w[0].first > a, "{w:?}");
+        assert!(w[0].steps().all(|s| s.is_multiple_of(c.output_every)));
+        assert_eq!(w[0].samples, SAMPLES_PER_STAGE);
+        assert_eq!(w[0].steps().filter(|s| is_sample(&w, *s)).count(), 20);
+        assert!(!is_sample(&w, w[0].first + 1) && !is_sample(&w, a));
+    }
+
+    fn sample(c: &ShearCase, step: u64, u: impl Fn(f64) -> f64) -> ProfileSample {
+        // 400 grains spread evenly over the gap, plus one in a tooth valley
+        let t = c.plates.tooth_height();
+        let top_y = 2e-3 + 2.0 * t;
+        let mut y: Vec<f64> = (0..400)
+            .map(|k| t + (k as f64 + 0.5) / 400.0 * 2e-3)
+            .collect();
+        y.push(0.5 * t);
+        let speed = c.stages[0].speed;
+        let vx = y
+            .iter()
+            .map(|y| speed * if *y < t { 1.0 } else { u((y - t) / 2e-3) })
+            .collect();
+        ProfileSample { step, top_y, y, vx }
+    }
+
+    #[test]
+    fn uniform_shear_grips_and_spans_the_gap() {
+        let c = case();
+        let w = schedule(&c)[0];
+        let s: Vec<ProfileSample> = w.steps().map(|st| sample(&c, st, |xi| 1.0 - xi)).collect();
+        let p = &profiles(&c, &s).unwrap()[0];
+        let n = p.layers.len();
+        assert_eq!(
+            n,
+            ((2e-3 / (2.0 * c.mean_radius())).round() as usize).max(4)
+        );
+        assert!(
+            p.slip_bottom.abs() < 0.01 && p.slip_top.abs() < 0.01,
+            "{p:?}"
+        );
+        assert!((p.band_width / 2e-3 - 1.0).abs() < 0.01, "{p:?}");
+        let grains: f64 = p.layers.iter().map(|l| l.grains).sum();
+        assert_eq!(
+            grains, 400.0,
+            "the valley grain is the plate's, not the gouge's"
+        );
+        assert!(p.layers.iter().all(|l| l.u_spread < 0.5 / n as f64));
+    }
+
+    #[test]
+    fn a_slipping_plate_and_a_narrow_band_are_measured() {
+        let c = case();
+        let w = schedule(&c)[0];
+        // the gouge lags the bottom plate by 30 % and shears only in its middle fifth
+        let u = |xi: f64| 0.7 * ((0.6 - xi) / 0.2).clamp(0.0, 1.0);
+        let s: Vec<ProfileSample> = w.steps().map(|st| sample(&c, st, u)).collect();
+        let p = &profiles(&c, &s).unwrap()[0];
+        assert!((p.slip_bottom - 0.3).abs() < 0.01, "{p:?}");
+        assert!(p.slip_top.abs() < 0.01, "{p:?}");
+        assert!(p.band_width < 0.5 * p.gap, "{p:?}");
+        let uni: Vec<ProfileSample> = w.steps().map(|st| sample(&c, st, |xi| 1.0 - xi)).collect();
+        let q = &profiles(&c, &uni).unwrap()[0];
+        assert!((p.layers[0].u - q.layers[0].u).abs() > 0.2);
+        // identical samples: a spread but no sample-to-sample scatter, so zero CIs
+        assert!(q
+            .layers
+            .iter()
+            .all(|l| l.u_ci95 < 1e-12 && l.u_spread > 0.0));
+        let m = VelocityProfile::mean(&[p, q]).unwrap();
+        assert!((m.slip_bottom - 0.15).abs() < 0.01, "{m:?}");
+        // over two seeds the CI comes from the seeds: wide where they differ
+        assert!(m.layers[0].u_ci95 > 1.0, "{m:?}");
+    }
+
+    #[test]
+    fn missing_samples_are_an_error() {
+        let c = case();
+        let w = schedule(&c)[0];
+        let s: Vec<ProfileSample> = w
+            .steps()
+            .skip(1)
+            .map(|st| sample(&c, st, |x| 1.0 - x))
+            .collect();
+        let e = profiles(&c, &s).unwrap_err().to_string();
+        assert!(e.contains("19 of 20"), "{e}");
+    }
+
+    #[test]
+    fn deck_schedule_names_the_next_sample() {
+        let w = [SampleWindow {
+            stage: 0,
+            first: 100,
+            every: 10,
+            samples: 3,
+        }];
+        let d = deck_dumps(&w, "prof_");
+        assert!(d.contains("(step<120)*"), "{d}");
+        assert!(d.contains("(step>=120)*1e15"), "{d}");
+        // evaluate the variable's formula here the way LIGGGHTS would
+        let next = |step: f64| {
+            let a = 100.0;
+            let b = 100.0 + 10.0 * (((step - 100.0) / 10.0).floor() + 1.0);
+            if step < 120.0 {
+                (a + b + (a - b).abs()) / 2.0
+            } else {
+                1e15
+            }
+        };
+        assert_eq!(
+            [next(0.0), next(100.0), next(105.0), next(110.0)],
+            [100.0, 110.0, 110.0, 120.0]
+        );
+    }
+}
