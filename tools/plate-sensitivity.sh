@@ -17,7 +17,7 @@ run() { # name engine-flag plate-flags... ; mu_r eta_r taken from $mr $er
   local dir="$out/$name-mur$mr-etar$er"
   echo "== $dir"
   # exit 1 (the codes disagree) is a result, recorded in the summary; 2 is an error
-  "$bin" shear --preset fast --mu-r "$mr" --eta-r "$er" --seeds 3 --quiet $engine "$@" \
+  "$bin" shear --preset fast --mu-r "$mr" --eta-r "$er" --seeds 3 $engine "$@" \
     --out "$dir" >"$dir.log" 2>&1 || [ $? -eq 1 ]
 }
 

@@ -1,14 +1,15 @@
 //! A self-contained HTML page: inline SVG plots, inline CSS, a few lines of inline script that
-//! let a browser test check the page (no network, no external files).
+//! let a browser test check the page (no network, no external files). Built with maud: every
+//! value interpolated into the markup is escaped, so no case or file name can inject markup.
 
 use crate::error::{Error, Result};
-use crate::report::bars::escape;
+use maud::{html, Markup, PreEscaped, DOCTYPE};
 use std::path::Path;
 
 /// An HTML page under construction; counts its plots.
 pub struct Page {
     title: String,
-    body: String,
+    body: Vec<Markup>,
     plots: usize,
 }
 
@@ -38,47 +39,44 @@ impl Page {
     pub fn new(title: &str) -> Self {
         Page {
             title: title.to_string(),
-            body: String::new(),
+            body: Vec::new(),
             plots: 0,
         }
     }
 
-    /// Appends raw HTML (callers escape text with [`escape`]).
-    pub fn html(&mut self, s: &str) {
-        self.body += s;
-        self.body.push('\n');
+    /// Appends markup (maud escapes every interpolated value unless marked [`PreEscaped`]).
+    pub fn push(&mut self, m: Markup) {
+        self.body.push(m);
     }
 
     /// Appends a section heading with an anchor.
     pub fn heading(&mut self, id: &str, text: &str) {
-        self.html(&format!("<h2 id=\"{}\">{}</h2>", escape(id), escape(text)));
+        self.push(html! { h2 id=(id) { (text) } });
     }
 
     /// Appends a paragraph of text.
     pub fn para(&mut self, text: &str) {
-        self.html(&format!("<p>{}</p>", escape(text)));
+        self.push(html! { p { (text) } });
     }
 
     /// A figure with an inline SVG (the document's XML prolog dropped, class `plot` added).
-    pub fn svg(&mut self, svg: &str, caption: &str) -> String {
+    /// The SVG comes from plotters, never from case text.
+    pub fn svg(&mut self, svg: &str, caption: &str) -> Markup {
         let start = svg.find("<svg").unwrap_or(0);
         let svg = svg[start..].replacen("<svg", "<svg class=\"plot\"", 1);
         self.plots += 1;
-        format!(
-            "<figure>{svg}<figcaption>{}</figcaption></figure>",
-            escape(caption)
-        )
+        html! { figure { (PreEscaped(svg)) figcaption { (caption) } } }
     }
 
     /// Like [`Page::svg`], reading the SVG from a file.
-    pub fn svg_file(&mut self, path: &Path, caption: &str) -> Result<String> {
+    pub fn svg_file(&mut self, path: &Path, caption: &str) -> Result<Markup> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Ok(self.svg(&text, caption))
     }
 
     /// Figures side by side.
-    pub fn figures(&mut self, figs: &[String]) {
-        self.html(&format!("<div class=\"plots\">{}</div>", figs.concat()));
+    pub fn figures(&mut self, figs: &[Markup]) {
+        self.push(html! { div.plots { @for f in figs { (f) } } });
     }
 
     pub fn plots(&self) -> usize {
@@ -87,36 +85,53 @@ impl Page {
 
     /// The finished document.
     pub fn finish(self) -> String {
-        format!(
-            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\
-             <style>{STYLE}</style><script>{SCRIPT}</script></head>\n\
-             <body data-plots-expected=\"{}\">\n{}</body></html>\n",
-            escape(&self.title),
-            self.plots,
-            self.body
-        )
+        html! {
+            (DOCTYPE)
+            html lang="en" {
+                head {
+                    meta charset="utf-8";
+                    title { (self.title) }
+                    style { (PreEscaped(STYLE)) }
+                    script { (PreEscaped(SCRIPT)) }
+                }
+                body data-plots-expected=(self.plots) {
+                    @for b in &self.body { (b) }
+                }
+            }
+        }
+        .into_string()
     }
 }
 
-/// A table: header cells, then rows of (cell html, css class).
-pub fn table(header: &[&str], rows: &[Vec<(String, &str)>]) -> String {
-    let mut s = String::from("<table><tr>");
-    for h in header {
-        s += &format!("<th>{}</th>", escape(h));
-    }
-    s += "</tr>";
-    for r in rows {
-        s += "<tr>";
-        for (cell, class) in r {
-            if class.is_empty() {
-                s += &format!("<td>{cell}</td>");
-            } else {
-                s += &format!("<td class=\"{class}\">{cell}</td>");
+/// A table cell: its content and a CSS class (`""` for none).
+pub type Cell = (Markup, &'static str);
+
+/// A text cell (escaped).
+pub fn text(s: impl AsRef<str>) -> Markup {
+    html! { (s.as_ref()) }
+}
+
+/// Rows of text cells (escaped).
+pub fn text_rows(rows: Vec<Vec<(String, &'static str)>>) -> Vec<Vec<Cell>> {
+    rows.into_iter()
+        .map(|r| r.into_iter().map(|(t, c)| (text(t), c)).collect())
+        .collect()
+}
+
+/// A table: header cells, then rows of cells.
+pub fn table(header: &[&str], rows: &[Vec<Cell>]) -> Markup {
+    html! {
+        table {
+            tr { @for h in header { th { (h) } } }
+            @for r in rows {
+                tr {
+                    @for (cell, class) in r {
+                        @if class.is_empty() { td { (cell) } } @else { td class=(class) { (cell) } }
+                    }
+                }
             }
         }
-        s += "</tr>";
     }
-    s + "</table>"
 }
 
 #[cfg(test)]
@@ -128,11 +143,11 @@ mod tests {
         let mut p = Page::new("a & b");
         let f = p.svg("<?xml version=\"1.0\"?>\n<svg width=\"1\"></svg>", "x<y");
         p.figures(&[f]);
-        p.html(&table(&["h"], &[vec![("1".into(), "pass")]]));
+        p.push(table(&["h"], &[vec![(text("1 < 2"), "pass")]]));
         let s = p.finish();
         assert!(s.contains("<title>a &amp; b</title>"));
         assert!(s.contains("<svg class=\"plot\" width=\"1\">") && !s.contains("<?xml"));
         assert!(s.contains("data-plots-expected=\"1\"") && s.contains("x&lt;y"));
-        assert!(s.contains("<td class=\"pass\">1</td>"));
+        assert!(s.contains("<td class=\"pass\">1 &lt; 2</td>"), "{s}");
     }
 }

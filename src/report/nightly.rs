@@ -4,19 +4,25 @@
 use crate::compare::CONTACT_RTOL;
 use crate::error::Result;
 use crate::fsutil::write_atomic;
-use crate::report::bars::{bar_chart, escape, Bar, BarGroup};
+use crate::report::bars::{bar_chart, Bar, BarGroup};
 use crate::report::history::Record;
-use crate::report::html::{table, Page};
+use crate::report::html::{table, text, text_rows, Cell, Page};
 use crate::report::plot::{line_plot, Curve, CurveData};
 use crate::run::nightly_outcome::{CodeStats, NightlySummary, ShearRow};
+use maud::{html, Markup};
 use std::path::Path;
 
-fn status(pass: bool, error: &Option<String>) -> (String, &'static str) {
+fn status(pass: bool, error: &Option<String>) -> (&'static str, &'static str) {
     match (error, pass) {
-        (Some(_), _) => ("ERROR".into(), "fail"),
-        (None, true) => ("agree".into(), "pass"),
-        (None, false) => ("DISAGREE".into(), "fail"),
+        (Some(_), _) => ("ERROR", "fail"),
+        (None, true) => ("agree", "pass"),
+        (None, false) => ("DISAGREE", "fail"),
     }
+}
+
+fn status_cell(pass: bool, error: &Option<String>) -> Cell {
+    let (st, class) = status(pass, error);
+    (text(st), class)
 }
 
 fn num(v: Option<f64>, prec: usize) -> String {
@@ -41,7 +47,7 @@ fn sci(v: f64) -> String {
 pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<String> {
     let plots = out.join("plots");
     let mut p = Page::new(&format!("verify nightly {}", s.date_utc));
-    p.html("<h1>Native DEM vs LIGGGHTS: nightly agreement report</h1>");
+    p.push(html! { h1 { "Native DEM vs LIGGGHTS: nightly agreement report" } });
     let (verdict, class) = if s.pass {
         ("ALL CASES AGREE", "pass")
     } else if s.errors.is_empty() {
@@ -49,7 +55,7 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
     } else {
         ("ERRORS", "fail")
     };
-    p.html(&format!("<div class=\"banner {class}\">{verdict}</div>"));
+    p.push(html! { div class={"banner " (class)} { (verdict) } });
     let budget = match s.budget_s {
         Some(b) => format!(
             " (budget {:.1} h: {})",
@@ -62,49 +68,43 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         ),
         None => String::new(),
     };
-    p.html(&format!(
-        "<p class=\"meta\">Night {} UTC, {} night ({}) · project commit <b>{}</b> · {} · machine {} · \
-         wall time <b>{:.1} min</b>{budget}</p>",
-        escape(&s.date_utc),
-        if s.quick { "quick" } else { "full" },
-        if s.quick {
-            "ci shear preset, 1 seed"
-        } else {
-            "fast shear preset, 3 seeds"
-        },
-        escape(&s.commit),
-        escape(&s.liggghts_version),
-        escape(&s.machine.describe()),
-        s.wall_time_s / 60.0,
-    ));
+    let (kind, what) = if s.quick {
+        ("quick", "ci shear preset, 1 seed")
+    } else {
+        ("full", "fast shear preset, 3 seeds")
+    };
+    p.push(html! {
+        p.meta {
+            "Night " (s.date_utc) " UTC, " (kind) " night (" (what) ") · project commit "
+            b { (s.commit) } " · " (s.liggghts_version) " · machine " (s.machine.describe())
+            " · wall time " b { (format!("{:.1} min", s.wall_time_s / 60.0)) } (budget)
+        }
+    });
     for e in &s.errors {
-        p.html(&format!("<p class=\"fail\">{}</p>", escape(e)));
+        p.push(html! { p.fail { (e) } });
     }
     let c_ok = s.contact.iter().filter(|c| c.pass).count();
     let c_bit = s.contact.iter().filter(|c| c.max_rel_err == 0.0).count();
     let s_ok = s.shear.iter().filter(|r| r.pass).count();
     let dmu_max = s.shear.iter().filter_map(|r| r.dmu).fold(0.0, f64::max);
-    p.html(&format!(
-        "<p style=\"font-size:18px\">Contact laws: <b>{c_ok}/{}</b> runs agree ({c_bit} bit for bit). \
-         Shear box: <b>{s_ok}/{}</b> cases agree; largest |Δμ| between the codes {dmu_max:.3}.</p>",
-        s.contact.len(),
-        s.shear.len()
-    ));
+    p.push(html! {
+        p style="font-size:18px" {
+            "Contact laws: " b { (c_ok) "/" (s.contact.len()) } " runs agree (" (c_bit)
+            " bit for bit). Shear box: " b { (s_ok) "/" (s.shear.len()) }
+            " cases agree; largest |Δμ| between the codes " (format!("{dmu_max:.3}")) "."
+        }
+    });
 
     // overview
     p.heading("overview", "Overview");
     let mut rows = Vec::new();
     for r in &s.shear {
-        let (st, class) = status(r.pass, &r.error);
         rows.push(vec![
-            (st, class),
-            ("shear".into(), ""),
+            status_cell(r.pass, &r.error),
+            (text("shear"), ""),
+            (html! { a href={"#" (anchor(&r.dir))} { (r.name) } }, ""),
             (
-                format!("<a href=\"#{}\">{}</a>", anchor(&r.dir), escape(&r.name)),
-                "",
-            ),
-            (
-                format!(
+                text(format!(
                     "|Δμ| = {}{}; normal stress off by {}",
                     num(r.dmu, 4),
                     match r.ci_overlap {
@@ -115,55 +115,45 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
                     r.stress_rel_err
                         .map(|e| format!("{:.2} %", 100.0 * e))
                         .unwrap_or("–".into())
-                ),
+                )),
                 "",
             ),
             (
-                format!(
+                text(format!(
                     "|Δμ| ≤ {} and 95 % CIs overlap; stress within {} %",
                     r.mu_atol,
                     100.0 * r.stress_rtol
-                ),
+                )),
                 "",
             ),
             match r.dashpot_stable {
-                Some(true) => ("stable".into(), "pass"),
-                Some(false) => ("explicit dashpot UNSTABLE at this dt".into(), "warn"),
-                None => ("–".into(), ""),
+                Some(true) => (text("stable"), "pass"),
+                Some(false) => (text("explicit dashpot UNSTABLE at this dt"), "warn"),
+                None => (text("–"), ""),
             },
         ]);
     }
     for r in &s.contact {
-        let (st, class) = status(r.pass, &r.error);
         rows.push(vec![
-            (st, class),
-            ("contact".into(), ""),
+            status_cell(r.pass, &r.error),
+            (text("contact"), ""),
             (
-                format!(
-                    "<a href=\"#{}\">{} / {}</a>",
-                    anchor(&r.dir),
-                    escape(&r.case),
-                    escape(&r.model)
-                ),
+                html! { a href={"#" (anchor(&r.dir))} { (r.case) " / " (r.model) } },
                 "",
             ),
             (
-                match &r.error {
-                    Some(e) => escape(e),
+                text(match &r.error {
+                    Some(e) => e.clone(),
                     None if r.max_rel_err == 0.0 => "bit for bit in every channel".into(),
-                    None => format!(
-                        "max rel err {} ({})",
-                        sci(r.max_rel_err),
-                        escape(&r.worst_channel)
-                    ),
-                },
+                    None => format!("max rel err {} ({})", sci(r.max_rel_err), r.worst_channel),
+                }),
                 "",
             ),
-            (format!("≤ {:.0e} of the channel peak", r.rtol), ""),
-            ("–".into(), ""),
+            (text(format!("≤ {:.0e} of the channel peak", r.rtol)), ""),
+            (text("–"), ""),
         ]);
     }
-    p.html(&table(
+    p.push(table(
         &[
             "status",
             "kind",
@@ -238,16 +228,16 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             _ => "–".into(),
         };
         rows.push(vec![
-            (escape(&r.name), ""),
-            (lw, "num"),
-            (lt, "num"),
-            (nw, "num"),
-            (nt, "num"),
-            (ratio, "num"),
+            (text(&r.name), ""),
+            (text(lw), "num"),
+            (text(lt), "num"),
+            (text(nw), "num"),
+            (text(nt), "num"),
+            (text(ratio), "num"),
         ]);
     }
     let contact_wall: f64 = s.contact.iter().map(|c| c.wall_s).sum();
-    p.html(&table(
+    p.push(table(
         &[
             "shear case",
             "LIGGGHTS wall [s]",
@@ -277,20 +267,15 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
          against time.",
     );
     for r in &s.contact {
-        p.html(&format!(
-            "<h3 id=\"{}\">{} / {} — {}</h3>",
-            anchor(&r.dir),
-            escape(&r.case),
-            escape(&r.model),
-            match &r.error {
-                Some(e) => format!("<span class=\"fail\">error: {}</span>", escape(e)),
-                None => format!(
-                    "max rel err {} (tolerance {:.0e})",
-                    sci(r.max_rel_err),
-                    r.rtol
-                ),
+        p.push(html! {
+            h3 id=(anchor(&r.dir)) {
+                (r.case) " / " (r.model) " — "
+                @match &r.error {
+                    Some(e) => span.fail { "error: " (e) },
+                    None => (format!("max rel err {} (tolerance {:.0e})", sci(r.max_rel_err), r.rtol)),
+                }
             }
-        ));
+        });
         let dir = out.join(&r.dir);
         let mut figs = Vec::new();
         for (f, cap) in [
@@ -316,31 +301,32 @@ fn anchor(dir: &str) -> String {
 
 fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
     let (st, class) = status(r.pass, &r.error);
-    p.html(&format!(
-        "<h3 id=\"{}\">{} — <span class=\"{class}\">{st}</span></h3>",
-        anchor(&r.dir),
-        escape(&r.name)
-    ));
+    p.push(html! { h3 id=(anchor(&r.dir)) { (r.name) " — " span class=(class) { (st) } } });
     if let Some(e) = &r.error {
-        p.html(&format!("<pre class=\"fail\">{}</pre>", escape(e)));
+        p.push(html! { pre.fail { (e) } });
     }
     if let Some(rp) = &r.replay {
         let (st, class) = status(rp.pass, &None);
-        p.html(&format!(
-            "<p>Contact by contact (<code>verify replay</code>, seed 1): {} windows of {} steps \
-             from LIGGGHTS' recorded states, worst step-1 error {} (limit {}), shortest horizon \
-             {} steps: <span class=\"{class}\">{st}</span>.</p>",
-            rp.windows,
-            rp.steps,
-            sci(rp.worst_step1),
-            sci(rp.rtol),
-            rp.min_horizon
-        ));
+        p.push(html! {
+            p {
+                "Contact by contact (" code { "verify replay" } ", seed 1): "
+                (format!(
+                    "{} windows of {} steps from LIGGGHTS' recorded states, worst step-1 error {} \
+                     (limit {}), shortest horizon {} steps: ",
+                    rp.windows,
+                    rp.steps,
+                    sci(rp.worst_step1),
+                    sci(rp.rtol),
+                    rp.min_horizon
+                ))
+                span class=(class) { (st) } "."
+            }
+        });
     }
     if let Some(pd) = &r.paired_dmu {
-        p.html(&format!(
-            "<p>Paired over the same seeds, native − LIGGGHTS: {:+.4} ± {:.4} (95 % CI, {} seeds), \
-             t = {:.2}, native higher in {} of {}.</p>",
+        p.para(&format!(
+            "Paired over the same seeds, native − LIGGGHTS: {:+.4} ± {:.4} (95 % CI, {} seeds), \
+             t = {:.2}, native higher in {} of {}.",
             pd.mean, pd.ci95, pd.n, pd.t, pd.b_higher, pd.n
         ));
     }
@@ -392,7 +378,7 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
             ]);
         }
     }
-    p.html(&table(
+    p.push(table(
         &[
             "code",
             "steady μ (95 % CI)",
@@ -404,7 +390,7 @@ fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
             "slip bottom / top plate",
             "wall [s]",
         ],
-        &rows,
+        &text_rows(rows),
     ));
     p.para(&format!(
         "Lockstep from a common compacted state: the codes agree (1e-6 of the peak: plate forces, \
@@ -458,7 +444,7 @@ fn trend_plots(
     history: &[Record],
     s: &NightlySummary,
     plots: &Path,
-) -> Result<Vec<String>> {
+) -> Result<Vec<Markup>> {
     let t0 = history.iter().map(|r| r.unix_time).min().unwrap_or(0);
     let day = |r: &Record| (r.unix_time - t0) as f64 / 86400.0;
     let nights = {

@@ -4,13 +4,13 @@
 
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::report::bars::escape;
-use crate::report::html::{table, Page};
+use crate::report::html::{table, text_rows, Page};
 use crate::report::paper::{aggregate, conclusions, heat_map, ClaimVerdict, Conclusion, Point};
 use crate::report::plot::{line_plot, Curve};
 use crate::run::convergence_outcome::{ConvergenceSummary, StudyCode};
 use crate::run::sweep::{collect, Manifest};
 use crate::run::Code;
+use maud::html;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
@@ -148,22 +148,22 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     };
     let figs = dir.join("figures");
     let mut page = Page::new("DEM sweep: the paper's parametric study");
-    page.html("<h1>Parametric study: steady friction over (mu_r, eta_r)</h1>");
+    page.push(html! { h1 { "Parametric study: steady friction over (mu_r, eta_r)" } });
     let wall_l: f64 = results.iter().filter_map(|r| r.liggghts_wall_s).sum();
     let wall_n: f64 = results.iter().filter_map(|r| r.native_wall_s).sum();
     let inv: Option<serde_json::Value> = std::fs::read_to_string(dir.join("last_invocation.json"))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok());
-    page.html(&format!(
-        "<p class=\"meta\">{} of {} runs ({} preset, {}, engine {:?}, dt factor {}, created {}). \
-         Run wall time summed over runs: native {:.2} h, LIGGGHTS {:.2} h{}.</p>",
+    page.push(html! { p.meta { (format!(
+        "{} of {} runs ({} preset, {}, engine {:?}, dt factor {}, created {}). \
+         Run wall time summed over runs: native {:.2} h, LIGGGHTS {:.2} h{}.",
         results.len(),
         m.runs.len(),
         m.base.preset,
         m.base.rolling,
         m.base.engine,
         m.base.protocol.dt_factor,
-        escape(&m.created_utc),
+        m.created_utc,
         wall_n / 3600.0,
         wall_l / 3600.0,
         inv.map(|v| format!(
@@ -173,12 +173,11 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             v["runs_run"]
         ))
         .unwrap_or_default()
-    ));
+    )) } });
     if !missing.is_empty() {
-        page.html(&format!(
-            "<p class=\"warn\">{} runs have no result yet: the figures show what exists.</p>",
-            missing.len()
-        ));
+        page.push(html! { p.warn {
+            (missing.len()) " runs have no result yet: the figures show what exists."
+        } });
     }
     page.heading("conclusions", "The paper's conclusions, checked");
     for (title, set) in [
@@ -194,9 +193,9 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 .iter()
                 .map(|c| {
                     vec![
-                        (escape(&c.claim), ""),
+                        (c.claim.clone(), ""),
                         (
-                            escape(c.verdict.words()),
+                            c.verdict.words().to_string(),
                             match c.verdict {
                                 ClaimVerdict::Agrees => "pass",
                                 ClaimVerdict::NotAssessable
@@ -205,12 +204,15 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                                 ClaimVerdict::Disagrees => "fail",
                             },
                         ),
-                        (escape(&c.evidence), ""),
+                        (c.evidence.clone(), ""),
                     ]
                 })
                 .collect();
-            page.html(&format!("<h3>{code} ({title})</h3>"));
-            page.html(&table(&["paper's claim", "our result", "evidence"], &rows));
+            page.push(html! { h3 { (code) " (" (title) ")" } });
+            page.push(table(
+                &["paper's claim", "our result", "evidence"],
+                &text_rows(rows),
+            ));
             for c in cs.iter().filter(|c| c.verdict != ClaimVerdict::Agrees) {
                 page.para(&format!(
                     "Where we differ from the paper ({code}, {title}): \"{}\" {} — {}.",
@@ -345,7 +347,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     }
     page.figures(&fig_html);
     page.heading("table", "Points");
-    let rows: Vec<Vec<(String, &str)>> = points
+    let rows: Vec<Vec<(String, &'static str)>> = points
         .iter()
         .map(|p| {
             let conv = conv_points
@@ -371,7 +373,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             ]
         })
         .collect();
-    page.html(&table(
+    page.push(table(
         &[
             "code",
             "speed [m/s]",
@@ -383,7 +385,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             "stability S (unstable ≥ 4)",
             "converged dt mu",
         ],
-        &rows,
+        &text_rows(rows),
     ));
     write_atomic(&dir.join("report.html"), page.finish().as_bytes())?;
     let rep = SweepReport {
