@@ -114,9 +114,10 @@ pub fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
 }
 
 /// The steady velocity profile of every stage (mean over seeds): v_x / V against the
-/// normalised height across the gouge, with the grains' spread as bars; `velocity_profile.svg`.
+/// normalised height across the gouge, with 95 % CIs as bars (the grains' spread, about 0.5 of
+/// V, is in the CSV and summary.json); `velocity_profile.svg`.
 pub fn profile_plot(out: &Path, lig: &[VelocityProfile], nat: &[VelocityProfile]) -> Result<()> {
-    // (label, colour, (xi, u) per layer, spread per layer)
+    // (label, colour, (xi, u) per layer, CI per layer)
     type ProfileCurve = (String, usize, Vec<(f64, f64)>, Vec<f64>);
     let mut data: Vec<ProfileCurve> = Vec::new();
     for (code, color, profiles) in [("LIGGGHTS", 0usize, lig), ("native", 1, nat)] {
@@ -131,7 +132,7 @@ pub fn profile_plot(out: &Path, lig: &[VelocityProfile], nat: &[VelocityProfile]
                 ),
                 color,
                 p.layers.iter().map(|l| (l.xi, l.u)).collect(),
-                p.layers.iter().map(|l| l.u_spread).collect(),
+                p.layers.iter().map(|l| l.u_ci95).collect(),
             ));
         }
     }
@@ -148,7 +149,7 @@ pub fn profile_plot(out: &Path, lig: &[VelocityProfile], nat: &[VelocityProfile]
         .collect();
     line_plot(
         &out.join("velocity_profile.svg"),
-        "steady velocity profile across the gouge (bars: spread of the grains)",
+        "steady velocity profile across the gouge (bars: 95 % CI)",
         "height between the tooth tips (0 bottom plate, 1 top plate)",
         "v_x / bottom plate speed",
         &curves,
