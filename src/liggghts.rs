@@ -319,6 +319,31 @@ pub fn dump_rows(path: &Path, step: u64, ncol: usize) -> Result<Vec<Vec<f64>>> {
     Ok(rows)
 }
 
+/// The atom rows of a dump sorted by id (`dump_modify sort id`): [`dump_rows`], then exactly
+/// `atoms` rows whose first column is the id 1, 2, ... (a lost atom or a reordered dump is an
+/// error naming the file).
+pub fn dump_atoms(path: &Path, step: u64, ncol: usize, atoms: usize) -> Result<Vec<Vec<f64>>> {
+    let rows = dump_rows(path, step, ncol)?;
+    if rows.len() != atoms {
+        return Err(parse_err(
+            path,
+            format!("{} atoms, the case has {atoms} (atoms lost?)", rows.len()),
+        ));
+    }
+    if let Some(k) = (0..rows.len()).find(|&k| rows[k][0] as usize != k + 1) {
+        return Err(parse_err(
+            path,
+            format!(
+                "row {} holds atom id {}, expected {}",
+                k + 1,
+                rows[k][0],
+                k + 1
+            ),
+        ));
+    }
+    Ok(rows)
+}
+
 /// Thermo rows of a LIGGGHTS log: (step, values) for every row with `ncol` values after the
 /// step, keeping the first row of each step (a new `run` repeats the last step, with the
 /// mesh force accumulated twice during setup).

@@ -136,6 +136,23 @@ pub struct VelocityProfile {
 }
 
 impl VelocityProfile {
+    /// The profile of these layers, with its slips and band width (module definitions).
+    fn from_layers(stage: usize, speed: f64, samples: usize, gap: f64, layers: Vec<Layer>) -> Self {
+        VelocityProfile {
+            stage,
+            speed,
+            samples,
+            gap,
+            layers,
+            slip_bottom: f64::NAN,
+            slip_top: f64::NAN,
+            slip_bottom_ci95: f64::NAN,
+            slip_top_ci95: f64::NAN,
+            band_width: f64::NAN,
+        }
+        .finish()
+    }
+
     fn finish(mut self) -> Self {
         let n = self.layers.len();
         let u = |k: usize| self.layers[k].u;
@@ -182,21 +199,13 @@ impl VelocityProfile {
                 }
             })
             .collect();
-        Some(
-            VelocityProfile {
-                stage: first.stage,
-                speed: first.speed,
-                samples: profiles.iter().map(|p| p.samples).sum(),
-                gap: avg(&|p| p.gap),
-                layers,
-                slip_bottom: f64::NAN,
-                slip_top: f64::NAN,
-                slip_bottom_ci95: f64::NAN,
-                slip_top_ci95: f64::NAN,
-                band_width: f64::NAN,
-            }
-            .finish(),
-        )
+        Some(VelocityProfile::from_layers(
+            first.stage,
+            first.speed,
+            profiles.iter().map(|p| p.samples).sum(),
+            avg(&|p| p.gap),
+            layers,
+        ))
     }
 }
 
@@ -252,19 +261,13 @@ pub fn profile(
             }
         })
         .collect();
-    Ok(VelocityProfile {
-        stage: window.stage,
-        speed: stage.speed,
-        samples: samples.len(),
+    Ok(VelocityProfile::from_layers(
+        window.stage,
+        stage.speed,
+        samples.len(),
         gap,
         layers,
-        slip_bottom: f64::NAN,
-        slip_top: f64::NAN,
-        slip_bottom_ci95: f64::NAN,
-        slip_top_ci95: f64::NAN,
-        band_width: f64::NAN,
-    }
-    .finish())
+    ))
 }
 
 /// The profile of every stage from one run's samples.

@@ -4,7 +4,7 @@
 use crate::deck::shear::{shear_deck, PROFILE_PREFIX, SNAPSHOT_PREFIX, THERMO_COLUMNS};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::liggghts::{dump_rows, last_thermo_step, parse_err, read_thermo, Liggghts, LOG_NAME};
+use crate::liggghts::{dump_atoms, last_thermo_step, parse_err, read_thermo, Liggghts, LOG_NAME};
 use crate::packing::Packing;
 use crate::profile::{is_sample, profiles, schedule, ProfileSample, VelocityProfile};
 use crate::report::progress::Progress;
@@ -290,28 +290,7 @@ fn read_profile_dumps(
     for w in schedule(case) {
         for step in w.steps() {
             let path = dir.join(format!("{PROFILE_PREFIX}{step}.dump"));
-            let d = dump_rows(&path, step, 3)?;
-            if d.len() != atoms {
-                return Err(parse_err(
-                    &path,
-                    format!("{} atoms, the case has {atoms}", d.len()),
-                ));
-            }
-            if let Some(k) = d
-                .iter()
-                .enumerate()
-                .position(|(k, r)| r[0] as usize != k + 1)
-            {
-                return Err(parse_err(
-                    &path,
-                    format!(
-                        "row {} holds atom id {}, expected {}",
-                        k + 1,
-                        d[k][0],
-                        k + 1
-                    ),
-                ));
-            }
+            let d = dump_atoms(&path, step, 3, atoms)?;
             let top_y = rows
                 .iter()
                 .find(|r| r.step == step)

@@ -72,31 +72,15 @@ pub fn deviations(case: &ShearCase) -> Vec<Deviation> {
             .join("; ")
     };
     differ("shear stages", stages(&paper), stages(case));
-    differ(
-        "density [kg/m3]",
-        format!("{}", pm.density),
-        format!("{}", m.density),
-    );
-    differ(
-        "Young's modulus [Pa]",
-        format!("{}", pm.youngs_modulus),
-        format!("{}", m.youngs_modulus),
-    );
-    differ(
-        "Poisson ratio",
-        format!("{}", pm.poisson_ratio),
-        format!("{}", m.poisson_ratio),
-    );
-    differ(
-        "restitution e",
-        format!("{}", pm.restitution),
-        format!("{}", m.restitution),
-    );
-    differ(
-        "sliding friction mu_p",
-        format!("{}", pm.friction),
-        format!("{}", m.friction),
-    );
+    for (parameter, paper, this) in [
+        ("density [kg/m3]", pm.density, m.density),
+        ("Young's modulus [Pa]", pm.youngs_modulus, m.youngs_modulus),
+        ("Poisson ratio", pm.poisson_ratio, m.poisson_ratio),
+        ("restitution e", pm.restitution, m.restitution),
+        ("sliding friction mu_p", pm.friction, m.friction),
+    ] {
+        differ(parameter, format!("{paper}"), format!("{this}"));
+    }
     if !PAPER_MU_R.contains(&m.rolling_friction) {
         differ(
             "rolling friction mu_r",

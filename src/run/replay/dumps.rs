@@ -3,6 +3,7 @@
 
 use crate::deck::shear::{REPLAY_ATOMS, REPLAY_PAIRS, REPLAY_WALLS};
 use crate::error::Result;
+use crate::liggghts::dump_atoms;
 pub(super) use crate::liggghts::{dump_rows, parse_err};
 use crate::solver::contact::ContactHistory;
 use crate::solver::shear::replay::RecordedState;
@@ -38,24 +39,12 @@ pub(super) fn read_dumped(
     ntri: [usize; 2],
 ) -> Result<Dumped> {
     let pa = dir.join(format!("{REPLAY_ATOMS}{step}.dump"));
-    let rows = dump_rows(&pa, step, 19)?;
-    if rows.len() != atoms {
-        return Err(parse_err(
-            &pa,
-            format!("{} atoms, the case has {atoms} (atoms lost?)", rows.len()),
-        ));
-    }
+    let rows = dump_atoms(&pa, step, 19, atoms)?;
     let mut st = RecordedState {
         step,
         ..Default::default()
     };
-    for (k, r) in rows.iter().enumerate() {
-        if r[0] as usize != k + 1 {
-            return Err(parse_err(
-                &pa,
-                format!("row {} holds atom id {}, expected {}", k + 1, r[0], k + 1),
-            ));
-        }
+    for r in &rows {
         st.x.push(v3(r, 1));
         st.v.push(v3(r, 7));
         st.omega.push(v3(r, 10));
