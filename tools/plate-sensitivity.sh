@@ -30,7 +30,7 @@ for p in "0 0" "0.5 0"; do
 done
 
 echo
-echo "| plates | (mu_r, eta_r) | code | steady mu (95 % CI) | per seed | slip bottom (95 % CI) | slip top (95 % CI) | band / gap [mm] |"
+echo "| plates | (mu_r, eta_r) | code | steady mu (95 % CI) | per seed | slip bottom / top per seed [%] | slip bottom, top: seed mean (95 % CI) [%] | band / gap [mm] |"
 echo "|---|---|---|---|---|---|---|---|"
 for s in "$out"/*/summary.json; do
   name=$(basename "$(dirname "$s")")
@@ -39,6 +39,6 @@ for s in "$out"/*/summary.json; do
     . as $s | ["liggghts", "native"][] as $c
     | select($s[$c] != null)
     | ($s.profiles[$c] | last) as $p
-    | "| \($name) | (\($s.mu_r), \($s.eta_r)) | \($c) | \(f($s[$c].mu; 3)) +- \(f($s[$c].mu_ci95; 3)) | \($s[$c].per_seed_mu | map(f(.; 3)) | join(", ")) | \(f(100 * $p.slip_bottom; 1)) +- \(f(100 * $p.slip_bottom_ci95; 1)) % | \(f(100 * $p.slip_top; 1)) +- \(f(100 * $p.slip_top_ci95; 1)) % | \(f(1000 * $p.band_width; 2)) / \(f(1000 * $p.gap; 2)) |"
+    | "| \($name) | (\($s.mu_r), \($s.eta_r)) | \($c) | \(f($s[$c].mu; 3)) +- \(f($s[$c].mu_ci95; 3)) | \($s[$c].per_seed_mu | map(f(.; 3)) | join(", ")) | \($s.seeds | map(.[$c + "_profiles"] | last | "\(f(100 * .slip_bottom; 0)) / \(f(100 * .slip_top; 0))") | join(", ")) | \(f(100 * $p.slip_bottom; 1)) +- \(f(100 * $p.slip_bottom_ci95; 1)), \(f(100 * $p.slip_top; 1)) +- \(f(100 * $p.slip_top_ci95; 1)) | \(f(1000 * $p.band_width; 2)) / \(f(1000 * $p.gap; 2)) |"
   ' "$s"
 done
