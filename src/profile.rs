@@ -7,9 +7,10 @@
 //! - the gouge spans the tooth tips: from `y_lo = tooth_height` above the bottom plate's base
 //!   (at y = 0) to `y_hi = top_y - tooth_height`; grains between the teeth (below `y_lo` or
 //!   above `y_hi`) belong to the plates and are not binned;
-//! - layers: `n = max(4, round(gap / d_mean))` equal slices of the normalised height
-//!   `xi = (y - y_lo) / (y_hi - y_lo)`, `gap` the mean tip-to-tip distance over the samples and
-//!   `d_mean` the number-weighted mean diameter; each layer holds the mean and the standard
+//! - layers: `n = max(4, round(gap0 / d_mean))` equal slices of the normalised height
+//!   `xi = (y - y_lo) / (y_hi - y_lo)`, `gap0` the case's estimated tip-to-tip gap (the same
+//!   for every seed and both codes, [`layer_count`]) and `d_mean` the number-weighted mean
+//!   diameter; each layer holds the mean and the standard
 //!   deviation (over grains and samples) of `u = v_x / V`, V the bottom plate's speed (the top
 //!   plate does not move along x);
 //! - slip: the plate's speed minus the gouge's at the tooth tips, as a fraction of V (0: the
@@ -209,6 +210,14 @@ impl VelocityProfile {
     }
 }
 
+/// Layers of every profile of a case: `max(4, round(gap0 / d_mean))` with `gap0` the case's
+/// estimated tip-to-tip gap, so that all seeds and both codes bin alike and their profiles
+/// can be averaged and compared layer by layer.
+pub fn layer_count(case: &ShearCase) -> usize {
+    let gap0 = case.estimated_height() - case.plates.tooth_height();
+    ((gap0 / (2.0 * case.mean_radius())).round() as usize).max(4)
+}
+
 /// The steady profile of one stage from its samples (see the module's definitions).
 pub fn profile(
     case: &ShearCase,
@@ -225,8 +234,7 @@ pub fn profile(
     let t = case.plates.tooth_height();
     let gaps: Vec<f64> = samples.iter().map(|s| s.top_y - 2.0 * t).collect();
     let gap = gaps.iter().sum::<f64>() / gaps.len() as f64;
-    let d = 2.0 * case.mean_radius();
-    let n = ((gap / d).round() as usize).max(4);
+    let n = layer_count(case);
     let (mut sum, mut sum2, mut count) = (vec![0.0; n], vec![0.0; n], vec![0usize; n]);
     // each sample's layer means, for the CI
     let mut per_sample: Vec<Vec<f64>> = vec![Vec::new(); n];
@@ -411,10 +419,8 @@ mod tests {
         let s: Vec<ProfileSample> = w.steps().map(|st| sample(&c, st, |xi| 1.0 - xi)).collect();
         let p = &profiles(&c, &s).unwrap()[0];
         let n = p.layers.len();
-        assert_eq!(
-            n,
-            ((2e-3 / (2.0 * c.mean_radius())).round() as usize).max(4)
-        );
+        // the case's layers (from its estimated gap), not the samples' 2 mm
+        assert_eq!(n, layer_count(&c));
         assert!(
             p.slip_bottom.abs() < 0.01 && p.slip_top.abs() < 0.01,
             "{p:?}"
