@@ -4,7 +4,24 @@ use crate::cli::{LiggghtsArgs, PresetArg};
 use crate::error::Result;
 use crate::run::bench::{run, BenchRequest};
 use crate::run::{out_or_default, Verdict, SHEAR_TIMEOUT_S};
-use clap::Args;
+use crate::solver::shear::KernelPath;
+use clap::{Args, ValueEnum};
+
+/// A pair-pass kernel path.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelArg {
+    Scalar,
+    Avx512,
+}
+
+impl From<KernelArg> for KernelPath {
+    fn from(k: KernelArg) -> Self {
+        match k {
+            KernelArg::Scalar => KernelPath::Scalar,
+            KernelArg::Avx512 => KernelPath::Avx512,
+        }
+    }
+}
 use std::path::PathBuf;
 
 #[derive(Args, Debug, Clone)]
@@ -18,6 +35,9 @@ pub struct BenchArgs {
     /// Native thread counts to measure.
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub threads: Vec<usize>,
+    /// Pair-pass kernel paths to measure (default: every path this CPU runs).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub kernels: Vec<KernelArg>,
     /// LIGGGHTS process counts to measure (2 runs `mpirun --allow-run-as-root -np 2`).
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub procs: Vec<usize>,
@@ -42,6 +62,16 @@ pub fn bench(a: BenchArgs) -> Result<Verdict> {
         preset: a.preset.into(),
         steps: a.steps,
         threads: a.threads.clone(),
+        kernels: if a.kernels.is_empty() {
+            // every path this CPU runs, the fastest last
+            let mut k = vec![KernelPath::Scalar];
+            if KernelPath::detect() != KernelPath::Scalar {
+                k.push(KernelPath::detect());
+            }
+            k
+        } else {
+            a.kernels.iter().map(|&k| k.into()).collect()
+        },
         procs: a.procs.clone(),
         particles: a.particles,
         compression_steps: a.compression_steps,

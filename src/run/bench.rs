@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::{last_loop_time, LOG_NAME};
 use crate::packing::{loose_packing, Packing};
-use crate::solver::shear::{compact, ShearSim};
+use crate::solver::shear::{compact, KernelPath, PhaseTimes, ShearSim};
 use crate::spec::shear::{Preset, ShearCase, Stage};
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
@@ -25,6 +25,9 @@ pub struct BenchRequest {
     pub steps: u64,
     /// Native thread counts to measure.
     pub threads: Vec<usize>,
+    /// Pair-pass kernel paths to measure natively (each with every thread count); every path
+    /// must run on this CPU.
+    pub kernels: Vec<KernelPath>,
     /// LIGGGHTS process counts to measure (2 runs `mpirun --allow-run-as-root -np 2`).
     pub procs: Vec<usize>,
     /// Particle count: the 2500-particle sample tiled k x k times (rounded to a square).
@@ -49,6 +52,12 @@ pub struct BenchRow {
     pub cpu_seconds: Option<f64>,
     pub particle_steps_per_s: f64,
     pub per_core: f64,
+    /// Native: the pair pass's kernel path.
+    #[serde(default)]
+    pub kernel: Option<KernelPath>,
+    /// Native: wall time of each phase of the timed steps [s].
+    #[serde(default)]
+    pub phases: Option<PhaseTimes>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,10 +68,13 @@ pub struct BenchReport {
     pub rolling: RollingModel,
     pub particles: usize,
     pub rows: Vec<BenchRow>,
-    /// native 1 thread / LIGGGHTS 1 process.
+    /// native 1 thread / LIGGGHTS 1 process (the fastest kernel path measured).
     pub native_vs_liggghts_1: Option<f64>,
-    /// native 2 threads / native 1 thread.
+    /// native 2 threads / native 1 thread (the fastest kernel path measured).
     pub native_2_vs_1: Option<f64>,
+    /// The kernel path the ratios above use.
+    #[serde(default)]
+    pub kernel: Option<KernelPath>,
     /// Resident memory per particle of the native solver [bytes] (peak RSS growth while the
     /// state was built and run, divided by the particle count).
     pub native_bytes_per_particle: Option<f64>,
@@ -135,6 +147,16 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     if a.threads.contains(&0) || a.procs.contains(&0) {
         return Err(Error::invalid("--threads/--procs", 0, ">= 1"));
     }
+    if a.kernels.is_empty() {
+        return Err(Error::invalid(
+            "--kernels",
+            "(none)",
+            "scalar and/or avx512",
+        ));
+    }
+    for k in &a.kernels {
+        k.checked("--kernels")?;
+    }
     let base = ShearCase::preset(a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
     base.validate(false)?;
     let k = ((a.particles as f64 / base.particles as f64).sqrt().round() as usize).max(1);
@@ -175,56 +197,73 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     c.snapshot_every = 0;
     let mut rows = Vec::new();
     let mut rss_native = None;
-    for &t in &a.threads {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-        let (secs, cpu) = pool.install(|| -> Result<(f64, Option<f64>)> {
-            let mut s = ShearSim::new(&c, &state);
-            s.setup(0.0)?;
-            s.step()?;
-            s.setup(speed)?;
-            for _ in 0..steps[0] {
-                s.step()?;
+    for &kernel in &a.kernels {
+        for &t in &a.threads {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
+            let (secs, cpu, phases) =
+                pool.install(|| -> Result<(f64, Option<f64>, Option<PhaseTimes>)> {
+                    let mut s = ShearSim::new(&c, &state);
+                    s.set_kernel(kernel)?;
+                    s.setup(0.0)?;
+                    s.step()?;
+                    s.setup(speed)?;
+                    for _ in 0..steps[0] {
+                        s.step()?;
+                    }
+                    s.setup(speed)?;
+                    s.time_phases(true);
+                    let (t0, c0) = (Instant::now(), process_cpu_seconds());
+                    for _ in 0..steps[1] {
+                        s.step()?;
+                    }
+                    let el = t0.elapsed().as_secs_f64();
+                    let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
+                    s.check_finite()?;
+                    Ok((el, cpu, s.phase_times()))
+                })?;
+            if rss_native.is_none() {
+                rss_native = match (rss0, peak_rss()) {
+                    (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
+                    _ => None,
+                };
             }
-            s.setup(speed)?;
-            let (t0, c0) = (Instant::now(), process_cpu_seconds());
-            for _ in 0..steps[1] {
-                s.step()?;
+            let r = steps[1] as f64 * n as f64 / secs;
+            println!(
+                "  native   {t} thread(s), {} kernel: {secs:8.2} s  {r:.3e} particle-steps/s  \
+                 ({:.3e} per core; CPU {})",
+                kernel.name(),
+                r / t as f64,
+                cpu.map(|c| format!(
+                    "{c:.2} s, {:.3e} particle-steps per CPU-second",
+                    steps[1] as f64 * n as f64 / c
+                ))
+                .unwrap_or_else(|| "time not available".into())
+            );
+            if let Some(ph) = &phases {
+                let per = 1e9 / (steps[1] as f64 * n as f64);
+                let parts: Vec<String> = ph
+                    .named()
+                    .iter()
+                    .map(|(name, sec)| format!("{name} {:.1}", sec * per))
+                    .collect();
+                println!("           ns per particle-step: {}", parts.join(", "));
             }
-            let el = t0.elapsed().as_secs_f64();
-            let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
-            s.check_finite()?;
-            Ok((el, cpu))
-        })?;
-        if rss_native.is_none() {
-            rss_native = match (rss0, peak_rss()) {
-                (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
-                _ => None,
-            };
+            rows.push(BenchRow {
+                code: "native".into(),
+                workers: t,
+                particles: n,
+                steps: steps[1],
+                seconds: secs,
+                cpu_seconds: cpu,
+                particle_steps_per_s: r,
+                per_core: r / t as f64,
+                kernel: Some(kernel),
+                phases,
+            });
         }
-        let r = steps[1] as f64 * n as f64 / secs;
-        println!(
-            "  native   {t} thread(s): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core; \
-             CPU {})",
-            r / t as f64,
-            cpu.map(|c| format!(
-                "{c:.2} s, {:.3e} particle-steps per CPU-second",
-                steps[1] as f64 * n as f64 / c
-            ))
-            .unwrap_or_else(|| "time not available".into())
-        );
-        rows.push(BenchRow {
-            code: "native".into(),
-            workers: t,
-            particles: n,
-            steps: steps[1],
-            seconds: secs,
-            cpu_seconds: cpu,
-            particle_steps_per_s: r,
-            per_core: r / t as f64,
-        });
     }
     if let Some(lr) = &a.liggghts {
         for &p in &a.procs {
@@ -247,12 +286,20 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 cpu_seconds: None,
                 particle_steps_per_s: r,
                 per_core: r / p as f64,
+                kernel: None,
+                phases: None,
             });
         }
     }
+    // the ratios use the fastest kernel path measured with one thread
+    let kernel = rows
+        .iter()
+        .filter(|r| r.code == "native" && r.workers == 1)
+        .max_by(|a, b| a.particle_steps_per_s.total_cmp(&b.particle_steps_per_s))
+        .and_then(|r| r.kernel);
     let get = |code: &str, w: usize| {
         rows.iter()
-            .find(|r| r.code == code && r.workers == w)
+            .find(|r| r.code == code && r.workers == w && (code != "native" || r.kernel == kernel))
             .map(|r| r.particle_steps_per_s)
     };
     let native_vs_liggghts_1 = get("native", 1).zip(get("liggghts", 1)).map(|(a, b)| a / b);
@@ -275,6 +322,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         rows,
         native_vs_liggghts_1,
         native_2_vs_1,
+        kernel,
         native_bytes_per_particle: rss_native,
         paper_run_hours,
         date_utc: utc_stamp(),

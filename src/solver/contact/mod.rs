@@ -19,6 +19,8 @@
 //! - During `setup` of every `run` (Verlet::setup), forces are computed with `shearupdate = 0`:
 //!   the kernels run but do not write the history.
 
+pub mod batch;
+pub mod lanes;
 pub mod normal;
 pub mod rolling;
 pub mod surface;
@@ -145,6 +147,7 @@ pub fn moved_beyond_half_skin(x: V3, hold: V3, skin: f64) -> bool {
 
 /// Force and torque increments of one partner (LIGGGHTS `ForceData`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
 pub struct ForceData {
     pub delta_f: V3,
     pub delta_torque: V3,
@@ -152,7 +155,9 @@ pub struct ForceData {
 
 /// The history slots of one contact, in LIGGGHTS' order: tangential `shearx..z` [m], then
 /// (epsd, epsd2, epsd3) `r_torquex_old..z` [N m].
+/// `repr(C)`: the batched pair pass reads the slots at fixed offsets.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
 pub struct ContactHistory {
     pub shear: V3,
     pub r_torque: V3,

@@ -13,6 +13,7 @@
 mod implicit;
 pub mod neighbor;
 mod observe;
+pub mod pairs;
 pub mod plate;
 mod rebuild;
 pub mod replay;
@@ -20,8 +21,9 @@ pub mod servo;
 mod walls;
 
 pub use observe::{PlateRecord, Snapshot};
+pub use pairs::KernelPath;
 
-use super::contact::{surfaces_intersect, ContactData, ForceData};
+use super::contact::{ContactData, ForceData};
 use super::integrate::NveSphere;
 use super::material::{sphere_mass, PairParams};
 use super::trimesh::{TriContactRecord, TriMesh};
@@ -99,7 +101,12 @@ pub struct ShearSim {
     rotation: Vec<[f64; 3]>,
     nl: NeighborList,
     xhold: Vec<[f64; 3]>,
+    /// Per pair, i's and j's force increments: kept only for observers (the replay's
+    /// contact dumps, tests), else empty; the pair pass adds straight into `acc`.
     pair_force: Vec<(ForceData, ForceData)>,
+    keep_pair_forces: bool,
+    /// [`pairs::BLOCKS`] x n: each block of pairs' sums of force and torque per particle.
+    acc: Vec<ForceData>,
     /// epsd_implicit: per pair the dashpot coefficient and contact normal.
     pair_damp: Vec<PairAux>,
     /// epsd_implicit: per particle `A = sum C P` (symmetric: xx yy zz xy xz yz) and
@@ -136,6 +143,55 @@ pub struct ShearSim {
     pub step: u64,
     top_force: [f64; 3],
     bottom_force: [f64; 3],
+    /// The pair pass's kernel path (the fastest this CPU runs, unless set).
+    kernel: KernelPath,
+    /// Wall time per phase of `step` (off unless [`ShearSim::time_phases`]).
+    phases: Option<PhaseClock>,
+}
+
+/// Wall time spent in each phase of [`ShearSim::step`] [s], summed over `steps` steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PhaseTimes {
+    pub steps: u64,
+    /// nve/sphere's two half-steps, the rotation sum and the implicit dashpot.
+    pub integrate: f64,
+    /// Plate motion (servo, move/mesh) and the servo's update.
+    pub plates: f64,
+    /// The rebuild decision and the rebuilds (pair list, plate candidates).
+    pub neighbor: f64,
+    /// The pair pass ([`pairs::pass`]).
+    pub pairs: f64,
+    /// Per-particle sums of pair forces and the particle-plate contacts.
+    pub sum_walls: f64,
+}
+
+impl PhaseTimes {
+    /// The phases with their names.
+    pub fn named(&self) -> [(&'static str, f64); 5] {
+        [
+            ("pair pass", self.pairs),
+            ("sums + walls", self.sum_walls),
+            ("integration", self.integrate),
+            ("neighbour", self.neighbor),
+            ("plates", self.plates),
+        ]
+    }
+}
+
+/// Adds the time since the last lap to one phase (a free function: the force loop holds
+/// borrows of other fields).
+fn lap(clock: &mut Option<PhaseClock>, phase: fn(&mut PhaseTimes) -> &mut f64) {
+    if let Some(p) = clock {
+        let now = std::time::Instant::now();
+        *phase(&mut p.times) += (now - p.last).as_secs_f64();
+        p.last = now;
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct PhaseClock {
+    last: std::time::Instant,
+    times: PhaseTimes,
 }
 
 impl ShearSim {
@@ -177,6 +233,8 @@ impl ShearSim {
             nl: NeighborList::default(),
             xhold: packing.position.clone(),
             pair_force: Vec::new(),
+            keep_pair_forces: false,
+            acc: vec![ForceData::default(); pairs::BLOCKS * n],
             pair_damp: Vec::new(),
             imp: vec![([0.0; 6], [0.0; 3]); n],
             implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
@@ -201,7 +259,49 @@ impl ShearSim {
             step: 0,
             top_force: [0.0; 3],
             bottom_force: [0.0; 3],
+            kernel: KernelPath::detect(),
+            phases: None,
         }
+    }
+
+    /// Starts (or stops) timing the phases of every step from zero.
+    pub fn time_phases(&mut self, on: bool) {
+        self.phases = on.then(|| PhaseClock {
+            last: std::time::Instant::now(),
+            times: PhaseTimes::default(),
+        });
+    }
+
+    /// The phase times so far, if timed.
+    pub fn phase_times(&self) -> Option<PhaseTimes> {
+        self.phases.map(|p| p.times)
+    }
+
+    /// Adds the time since the last lap to one phase.
+    fn lap(&mut self, phase: fn(&mut PhaseTimes) -> &mut f64) {
+        lap(&mut self.phases, phase)
+    }
+
+    /// Chooses the pair pass's kernel path (both give the same bits); an error if this CPU
+    /// cannot run it.
+    pub fn set_kernel(&mut self, path: KernelPath) -> Result<()> {
+        self.kernel = path.checked("kernel")?;
+        Ok(())
+    }
+
+    /// The pair pass's kernel path.
+    pub fn kernel(&self) -> KernelPath {
+        self.kernel
+    }
+
+    /// Sizes the per-pair buffers for the current pair list (after a build).
+    fn size_pair_buffers(&mut self) {
+        let np = self.nl.pairs.len();
+        self.pair_force.resize(
+            if self.keep_pair_forces { np } else { 0 },
+            Default::default(),
+        );
+        self.pair_damp.resize(np, PairAux::default());
     }
 
     /// Starts a new run (LIGGGHTS `run` after changing fixes): the bottom plate's speed, the
@@ -224,6 +324,10 @@ impl ShearSim {
     /// One time step.
     pub fn step(&mut self) -> Result<()> {
         self.step += 1;
+        if let Some(p) = &mut self.phases {
+            p.last = std::time::Instant::now();
+            p.times.steps += 1;
+        }
         let nve = self.nve;
         let dt = self.nve.dtv;
         let (radius, mass) = (&self.radius, &self.mass);
@@ -241,7 +345,9 @@ impl ShearSim {
                     rot[k] += w[k] * dt;
                 }
             });
+        self.lap(|p| &mut p.integrate);
         self.move_plates();
+        self.lap(|p| &mut p.plates);
         if self.decide_rebuild() {
             self.rebuild();
         } else {
@@ -249,6 +355,7 @@ impl ShearSim {
             // than skin/2 since the last build asks for a rebuild at the next step
             self.mesh_rebuild_pending = self.plates_moved();
         }
+        self.lap(|p| &mut p.neighbor);
         self.compute_forces(true)?;
         if let Some((v, w)) = &mut self.force_time_velocities {
             v.clone_from(&self.v);
@@ -266,7 +373,9 @@ impl ShearSim {
         if self.implicit {
             self.implicit_rotation();
         }
+        self.lap(|p| &mut p.integrate);
         self.servo.final_integrate(self.top_force, self.nve.dtv);
+        self.lap(|p| &mut p.plates);
         Ok(())
     }
 
@@ -289,48 +398,28 @@ impl ShearSim {
     fn compute_forces(&mut self, update_history: bool) -> Result<()> {
         let params = &self.params;
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
-        // pair forces: each pair writes its own history and force slot
-        self.nl
-            .pairs
-            .par_iter_mut()
-            .zip(
-                self.pair_force
-                    .par_iter_mut()
-                    .zip(self.pair_damp.par_iter_mut()),
-            )
-            .with_min_len(HEAVY_CHUNK)
-            .for_each(|(p, (out, damp))| {
-                let (i, j) = (p.i as usize, p.j as usize);
-                let Some(mut cd) = pair_contact(
-                    p,
-                    (x[i], x[j]),
-                    (radius[i], radius[j]),
-                    (mass[i], mass[j]),
-                    (v[i], v[j]),
-                    (omega[i], omega[j]),
-                ) else {
-                    *out = Default::default();
-                    *damp = PairAux::default();
-                    return;
-                };
-                let (fi, fj, o) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
-                *out = (fi, fj);
-                let ft2 = o.ft[0] * o.ft[0] + o.ft[1] * o.ft[1] + o.ft[2] * o.ft[2];
-                let cap = params.coeff_frict * o.normal.fn_.abs();
-                *damp = PairAux {
-                    damping: o.implicit_damping,
-                    en: cd.en,
-                    contact: if o.rolling_mobilised {
-                        PairContact::RollingMobilised
-                    } else {
-                        PairContact::Touching
-                    },
-                    sliding: ft2 >= cap * cap * (1.0 - 1e-9),
-                };
-            });
+        // pair forces: each pair writes its own history, force slot and state
+        pairs::pass(
+            self.kernel,
+            &mut self.nl.pairs,
+            &mut self.pair_force,
+            &mut self.pair_damp,
+            &mut self.acc,
+            pairs::Particles {
+                x,
+                v,
+                omega,
+                radius,
+                mass,
+            },
+            params,
+            update_history,
+        );
+        lap(&mut self.phases, |p| &mut p.pairs);
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
-        let pf = &self.pair_force;
+        let acc = &self.acc;
+        let n = self.x.len();
         let pd = &self.pair_damp;
         let implicit = self.implicit;
         let torsion = params.torsion_torque;
@@ -378,15 +467,12 @@ impl ShearSim {
                         add_dashpot(imp, c, n, torsion, omega[other]);
                     }
                 }
-                for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
-                    let fd = if is_i {
-                        &pf[k as usize].0
-                    } else {
-                        &pf[k as usize].1
-                    };
+                // the pair blocks' sums in block order (pairs::pass)
+                for b in 0..pairs::BLOCKS {
+                    let a = &acc[b * n + q];
                     for c in 0..3 {
-                        f[c] += fd.delta_f[c];
-                        t[c] += fd.delta_torque[c];
+                        f[c] += a.delta_f[c];
+                        t[c] += a.delta_torque[c];
                     }
                 }
                 if !walls.particle(q, slots, f, t, wf, imp) {
@@ -409,6 +495,7 @@ impl ShearSim {
         }
         self.bottom_force = tb;
         self.top_force = tt;
+        lap(&mut self.phases, |p| &mut p.sum_walls);
         if !(tt.iter().chain(tb.iter()).all(|v| v.is_finite())) {
             return Err(Error::Solver {
                 step: self.step,

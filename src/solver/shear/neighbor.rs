@@ -18,7 +18,10 @@ use crate::solver::contact::ContactHistory;
 /// contact, one per owner, each computed from its own rounded ghost coordinate, and reports the
 /// higher id's copy (`compute pair/gran/local` drops the other); this orientation makes the
 /// native pair that copy, operation for operation, so its history is the one LIGGGHTS dumps.
+/// `repr(C)`, 80 bytes: the batched pair pass gathers `shift` and `hist` at fixed offsets
+/// (checked below).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
 pub struct Pair {
     pub i: u32,
     pub j: u32,
@@ -26,6 +29,15 @@ pub struct Pair {
     pub shift: [f64; 3],
     pub hist: ContactHistory,
 }
+
+/// Layout the AVX-512 pair pass relies on: `shift` at f64 slot 1, `hist.shear` at 4,
+/// `hist.r_torque` at 7, 10 slots per pair.
+const _: () = {
+    assert!(std::mem::size_of::<Pair>() == 80);
+    assert!(std::mem::offset_of!(Pair, shift) == 8);
+    assert!(std::mem::offset_of!(Pair, hist) == 32);
+    assert!(std::mem::offset_of!(ContactHistory, r_torque) == 24);
+};
 
 /// The list and the per-particle index of its pairs (CSR), for a deterministic reduction.
 #[derive(Clone, Debug, Default)]

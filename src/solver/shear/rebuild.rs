@@ -3,7 +3,7 @@
 //! (periodic wrap, pair list, plates' elements wrapped and refreshed), and the per-particle
 //! plate-triangle candidates built with it.
 
-use super::{image_shift, PairAux, ShearSim, LIGHT_CHUNK};
+use super::{image_shift, ShearSim, LIGHT_CHUNK};
 use crate::solver::contact::moved_beyond_half_skin;
 use crate::solver::vec3::V3;
 use rayon::prelude::*;
@@ -59,10 +59,7 @@ impl ShearSim {
         self.rebuild_plates();
         self.build_wall_candidates();
         self.xhold.clone_from(&self.x);
-        self.pair_force
-            .resize(self.nl.pairs.len(), Default::default());
-        self.pair_damp
-            .resize(self.nl.pairs.len(), PairAux::default());
+        self.size_pair_buffers();
     }
 
     /// The plates' part of a rebuild: the bottom mesh's elements wrapped into the box

@@ -1,0 +1,313 @@
+//! Lane arithmetic for batched contact kernels: one generic kernel body, instantiated for a
+//! single contact (`f64`, masks `bool`) and for 8 contacts at once (AVX-512, [`F8`]).
+//!
+//! Bit-identity with the scalar kernels rests on three facts, each kept here:
+//! - every operation is one IEEE operation per lane in the scalar order: `+ - * /` and `sqrt`
+//!   are correctly rounded in AVX-512 as in scalar SSE2, and nothing is fused (no FMA: Rust
+//!   never contracts, and these wrappers call the separate add and multiply instructions);
+//! - negation and `abs` flip or clear the sign bit, as Rust's `-x` and `f64::abs` do (not
+//!   `0 - x`, which differs for zeros);
+//! - comparisons keep Rust's NaN semantics: `<`, `<=`, `>`, `>=` are false on NaN (ordered
+//!   predicates), `!=` is true on NaN (unordered predicate).
+//!
+//! Branches of the scalar code become masks: both sides are computed for every lane and
+//! [`Lanes::select`] keeps the side the scalar code would have taken. A side that is not
+//! taken may compute a NaN or an infinity (a division by zero), which is discarded; floating
+//! point exceptions do not trap.
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// A mask of lanes (one `bool` per lane).
+pub trait Mask: Copy {
+    fn and(self, o: Self) -> Self;
+    fn or(self, o: Self) -> Self;
+    fn not(self) -> Self;
+    /// Some lane is set: lets a kernel skip work whose result every lane would discard.
+    fn any(self) -> bool;
+}
+
+impl Mask for bool {
+    #[inline(always)]
+    fn and(self, o: Self) -> Self {
+        self & o
+    }
+    #[inline(always)]
+    fn or(self, o: Self) -> Self {
+        self | o
+    }
+    #[inline(always)]
+    fn not(self) -> Self {
+        !self
+    }
+    #[inline(always)]
+    fn any(self) -> bool {
+        self
+    }
+}
+
+/// Lanes of `f64`: the operations a contact kernel uses, each the IEEE operation per lane.
+pub trait Lanes:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    type M: Mask;
+    fn splat(v: f64) -> Self;
+    fn sqrt(self) -> Self;
+    /// Clears the sign bit (`f64::abs`).
+    fn abs(self) -> Self;
+    /// `self > o`, false on NaN.
+    fn gt(self, o: Self) -> Self::M;
+    /// `self >= o`, false on NaN.
+    fn ge(self, o: Self) -> Self::M;
+    /// `self <= o`, false on NaN.
+    fn le(self, o: Self) -> Self::M;
+    /// `self != o`, true on NaN.
+    fn ne(self, o: Self) -> Self::M;
+    /// Per lane: `if m { t } else { f }`.
+    fn select(m: Self::M, t: Self, f: Self) -> Self;
+}
+
+impl Lanes for f64 {
+    type M = bool;
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> bool {
+        self > o
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> bool {
+        self >= o
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> bool {
+        self <= o
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> bool {
+        self != o
+    }
+    #[inline(always)]
+    fn select(m: bool, t: Self, f: Self) -> Self {
+        if m {
+            t
+        } else {
+            f
+        }
+    }
+}
+
+/// Per-lane `select` of three-vectors.
+#[inline(always)]
+pub fn select3<L: Lanes>(m: L::M, t: [L; 3], f: [L; 3]) -> [L; 3] {
+    [
+        L::select(m, t[0], f[0]),
+        L::select(m, t[1], f[1]),
+        L::select(m, t[2], f[2]),
+    ]
+}
+
+#[cfg(target_arch = "x86_64")]
+pub use avx512::{F8, M8};
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    //! 8 lanes of f64 in one AVX-512 register. A value of [`F8`] can only be made inside a
+    //! function compiled with `avx512f`, which callers enter only after
+    //! `is_x86_feature_detected!("avx512f")`: the wrappers below are `#[inline(always)]` so
+    //! that they are compiled into that function with its target features.
+    use super::{Lanes, Mask};
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Div, Mul, Neg, Sub};
+
+    #[derive(Clone, Copy)]
+    pub struct F8(pub __m512d);
+
+    #[derive(Clone, Copy)]
+    pub struct M8(pub __mmask8);
+
+    impl Mask for M8 {
+        #[inline(always)]
+        fn and(self, o: Self) -> Self {
+            M8(self.0 & o.0)
+        }
+        #[inline(always)]
+        fn or(self, o: Self) -> Self {
+            M8(self.0 | o.0)
+        }
+        #[inline(always)]
+        fn not(self) -> Self {
+            M8(!self.0)
+        }
+        #[inline(always)]
+        fn any(self) -> bool {
+            self.0 != 0
+        }
+    }
+
+    macro_rules! binop {
+        ($tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for F8 {
+                type Output = F8;
+                #[inline(always)]
+                fn $f(self, o: F8) -> F8 {
+                    // SAFETY: F8 exists only inside avx512f code (module doc).
+                    F8(unsafe { $intr(self.0, o.0) })
+                }
+            }
+        };
+    }
+    binop!(Add, add, _mm512_add_pd);
+    binop!(Sub, sub, _mm512_sub_pd);
+    binop!(Mul, mul, _mm512_mul_pd);
+    binop!(Div, div, _mm512_div_pd);
+
+    impl Neg for F8 {
+        type Output = F8;
+        #[inline(always)]
+        fn neg(self) -> F8 {
+            // SAFETY: as above. Flips the sign bit, as Rust's `-x`.
+            F8(unsafe {
+                _mm512_castsi512_pd(_mm512_xor_si512(
+                    _mm512_castpd_si512(self.0),
+                    _mm512_set1_epi64(i64::MIN),
+                ))
+            })
+        }
+    }
+
+    impl Lanes for F8 {
+        type M = M8;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            F8(unsafe { _mm512_set1_pd(v) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            F8(unsafe { _mm512_sqrt_pd(self.0) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            F8(unsafe { _mm512_abs_pd(self.0) })
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> M8 {
+            M8(unsafe { _mm512_cmp_pd_mask::<_CMP_GT_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn ge(self, o: Self) -> M8 {
+            M8(unsafe { _mm512_cmp_pd_mask::<_CMP_GE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> M8 {
+            M8(unsafe { _mm512_cmp_pd_mask::<_CMP_LE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn ne(self, o: Self) -> M8 {
+            M8(unsafe { _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn select(m: M8, t: Self, f: Self) -> Self {
+            // blend(k, a, b): b where k is set, else a
+            F8(unsafe { _mm512_mask_blend_pd(m.0, f.0, t.0) })
+        }
+    }
+
+    impl F8 {
+        /// `base[idx[l]]` per lane (a gather).
+        ///
+        /// # Safety
+        /// avx512f; every index in bounds of the allocation `base` points into.
+        #[inline(always)]
+        pub unsafe fn gather(base: *const f64, idx: __m512i) -> F8 {
+            F8(_mm512_i64gather_pd::<8>(idx, base as *const _))
+        }
+
+        /// The 8 lanes as an array.
+        #[inline(always)]
+        pub fn to_array(self) -> [f64; 8] {
+            let mut a = [0.0; 8];
+            // SAFETY: an unaligned store of 64 bytes into a 64-byte array.
+            unsafe { _mm512_storeu_pd(a.as_mut_ptr(), self.0) };
+            a
+        }
+    }
+
+    impl M8 {
+        pub fn bits(self) -> u8 {
+            self.0
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scalar_lanes_keep_rust_semantics() {
+        assert!(!f64::NAN.ge(1.0));
+        assert!(f64::NAN.ne(f64::NAN));
+        assert_eq!((-0.0f64).abs().to_bits(), 0.0f64.to_bits());
+        assert_eq!(<f64 as Lanes>::select(true, 1.0, 2.0), 1.0);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx512_lanes_give_the_scalar_bits() {
+        if !std::arch::is_x86_feature_detected!("avx512f") {
+            eprintln!("avx512f not available: the AVX-512 lanes are not exercised here");
+            return;
+        }
+        // SAFETY: avx512f detected above.
+        unsafe { check() }
+
+        #[target_feature(enable = "avx512f")]
+        unsafe fn check() {
+            let a = [1.0, -0.0, 0.0, f64::NAN, 3.5e-300, -7.25, 1e300, 2.0];
+            let b = [3.0, 0.0, -0.0, 1.0, 1e-20, 0.1, 1e-300, f64::INFINITY];
+            let (va, vb) = (
+                F8(std::arch::x86_64::_mm512_loadu_pd(a.as_ptr())),
+                F8(std::arch::x86_64::_mm512_loadu_pd(b.as_ptr())),
+            );
+            let bits = |v: F8| v.to_array().map(f64::to_bits);
+            let each = |f: fn(f64, f64) -> f64| {
+                let mut r = [0u64; 8];
+                for l in 0..8 {
+                    r[l] = f(a[l], b[l]).to_bits();
+                }
+                r
+            };
+            assert_eq!(bits(va + vb), each(|x, y| x + y));
+            assert_eq!(bits(va - vb), each(|x, y| x - y));
+            assert_eq!(bits(va * vb), each(|x, y| x * y));
+            assert_eq!(bits(va / vb), each(|x, y| x / y));
+            assert_eq!(bits(-va), each(|x, _| -x));
+            assert_eq!(bits(va.abs()), each(|x, _| x.abs()));
+            assert_eq!(bits(va.sqrt()), each(|x, _| x.sqrt()));
+            let m = |mk: M8, f: fn(f64, f64) -> bool| {
+                (0..8).all(|l| ((mk.bits() >> l) & 1 == 1) == f(a[l], b[l]))
+            };
+            assert!(m(va.gt(vb), |x, y| x > y));
+            assert!(m(va.ge(vb), |x, y| x >= y));
+            assert!(m(va.le(vb), |x, y| x <= y));
+            assert!(m(va.ne(vb), |x, y| x != y));
+            let s = F8::select(va.gt(vb), va, vb);
+            assert_eq!(bits(s), each(|x, y| if x > y { x } else { y }));
+        }
+    }
+}

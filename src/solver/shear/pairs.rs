@@ -1,0 +1,515 @@
+//! The pair pass of the shear box: every listed pair's contact force, history and state, by
+//! one of two kernel paths that give the same bits (tested on dense sheared states):
+//! - [`KernelPath::Scalar`]: [`surfaces_intersect`], the kernels that mirror LIGGGHTS'
+//!   headers one contact at a time (also what the contact cases and the walls use);
+//! - [`KernelPath::Avx512`]: [`batch::pair`] on 8 consecutive listed pairs at once, their
+//!   particles' data gathered from the particle arrays, the results written back per pair.
+//!   Chosen at run time where the CPU has AVX-512F.
+//!
+//! [`batch::pair`]: crate::solver::contact::batch::pair
+//!
+//! Each pair writes only its own history and state; its force and torque increments go
+//! straight into per-particle sums of its block of the pair list ([`BLOCKS`], fixed pieces), in
+//! pair order, so the results do not depend on the thread count.
+
+use super::neighbor::Pair;
+use super::{pair_contact, PairAux, PairContact};
+use crate::error::{Error, Result};
+use crate::solver::contact::{surfaces_intersect, ForceData};
+use crate::solver::material::PairParams;
+use crate::solver::vec3::V3;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// Which implementation evaluates the pair contacts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KernelPath {
+    /// One contact at a time ([`surfaces_intersect`]).
+    Scalar,
+    /// 8 contacts per AVX-512 vector ([`batch::pair`]).
+    Avx512,
+}
+
+impl KernelPath {
+    /// The fastest path this CPU runs.
+    pub fn detect() -> Self {
+        if avx512_available() {
+            KernelPath::Avx512
+        } else {
+            KernelPath::Scalar
+        }
+    }
+
+    /// `path` if this CPU can run it, else an error naming `field`.
+    pub fn checked(self, field: &str) -> Result<Self> {
+        if self == KernelPath::Avx512 && !avx512_available() {
+            return Err(Error::invalid(
+                field,
+                "avx512",
+                "scalar on this CPU (it has no AVX-512F)",
+            ));
+        }
+        Ok(self)
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            KernelPath::Scalar => "scalar",
+            KernelPath::Avx512 => "avx512",
+        }
+    }
+}
+
+fn avx512_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The particle arrays a pair reads.
+#[derive(Clone, Copy)]
+pub(super) struct Particles<'a> {
+    pub x: &'a [V3],
+    pub v: &'a [V3],
+    pub omega: &'a [V3],
+    pub radius: &'a [f64],
+    pub mass: &'a [f64],
+}
+
+/// Fixed blocks of the pair list: each block adds its pairs' forces, in pair order, into its
+/// own per-particle sums, and the particles then add the blocks' sums in block order. The
+/// blocks do not depend on the thread count, so neither do the results.
+pub const BLOCKS: usize = 4;
+
+/// Adds one pair's increments to its particles' sums (i first, then j).
+#[inline(always)]
+fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &ForceData) {
+    for (q, d) in [(i, fi), (j, fj)] {
+        let a = &mut acc[q];
+        for c in 0..3 {
+            a.delta_f[c] += d.delta_f[c];
+            a.delta_torque[c] += d.delta_torque[c];
+        }
+    }
+}
+
+/// Evaluates every listed pair: its state, (when `update_history`) its history, and its
+/// force and torque increments, added to block sums `acc` ([`BLOCKS`] x particles, see
+/// [`BLOCKS`]); `out` (empty, or one slot per pair) receives the increments too.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn pass(
+    path: KernelPath,
+    pairs: &mut [Pair],
+    out: &mut [(ForceData, ForceData)],
+    aux: &mut [PairAux],
+    acc: &mut [ForceData],
+    s: Particles,
+    params: &PairParams,
+    update_history: bool,
+) {
+    let n = s.x.len();
+    assert!(acc.len() == BLOCKS * n && aux.len() == pairs.len());
+    assert!(out.is_empty() || out.len() == pairs.len());
+    let per = pairs.len().div_ceil(BLOCKS).max(1);
+    // the blocks: pairs, states, optional force slots and sums, split at fixed places
+    let mut blocks = Vec::with_capacity(BLOCKS);
+    let (mut p_rest, mut a_rest, mut o_rest, mut s_rest) = (pairs, aux, out, acc);
+    for _ in 0..BLOCKS {
+        let m = per.min(p_rest.len());
+        let (p, pr) = p_rest.split_at_mut(m);
+        let (a, ar) = a_rest.split_at_mut(m);
+        let (o, or) = o_rest.split_at_mut(if o_rest.is_empty() { 0 } else { m });
+        let (sum, sr) = s_rest.split_at_mut(n);
+        blocks.push((p, a, o, sum));
+        (p_rest, a_rest, o_rest, s_rest) = (pr, ar, or, sr);
+    }
+    blocks.into_par_iter().for_each(|(p, a, o, sum)| {
+        sum.fill(ForceData::default());
+        match path {
+            KernelPath::Scalar => {
+                for k in 0..p.len() {
+                    let (fi, fj) = scalar_one(&mut p[k], &mut a[k], s, params, update_history);
+                    accumulate(sum, p[k].i as usize, p[k].j as usize, &fi, &fj);
+                    if !o.is_empty() {
+                        o[k] = (fi, fj);
+                    }
+                }
+            }
+            KernelPath::Avx512 => {
+                #[cfg(target_arch = "x86_64")]
+                {
+                    assert!(avx512_available(), "the AVX-512 path needs avx512f");
+                    let c = avx512::CHUNK;
+                    for start in (0..p.len()).step_by(c) {
+                        let end = (start + c).min(p.len());
+                        let oc = if o.is_empty() {
+                            &mut [][..]
+                        } else {
+                            &mut o[start..end]
+                        };
+                        // SAFETY: avx512f checked above; the slices have equal lengths <=
+                        // CHUNK (or `oc` is empty); particle indices are below n = sum.len().
+                        unsafe {
+                            avx512::chunk(
+                                &mut p[start..end],
+                                oc,
+                                &mut a[start..end],
+                                sum,
+                                s,
+                                params,
+                                update_history,
+                            )
+                        }
+                    }
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!("KernelPath::Avx512 is only selected on x86_64")
+            }
+        }
+    });
+}
+
+/// One pair by the scalar kernels: its state and history; returns i's and j's increments
+/// (zero when apart).
+fn scalar_one(
+    p: &mut Pair,
+    damp: &mut PairAux,
+    s: Particles,
+    params: &PairParams,
+    update_history: bool,
+) -> (ForceData, ForceData) {
+    let (i, j) = (p.i as usize, p.j as usize);
+    let Some(mut cd) = pair_contact(
+        p,
+        (s.x[i], s.x[j]),
+        (s.radius[i], s.radius[j]),
+        (s.mass[i], s.mass[j]),
+        (s.v[i], s.v[j]),
+        (s.omega[i], s.omega[j]),
+    ) else {
+        *damp = PairAux::default();
+        return Default::default();
+    };
+    let (fi, fj, o) = surfaces_intersect(&mut cd, params, &mut p.hist, update_history);
+    let ft2 = o.ft[0] * o.ft[0] + o.ft[1] * o.ft[1] + o.ft[2] * o.ft[2];
+    let cap = params.coeff_frict * o.normal.fn_.abs();
+    *damp = PairAux {
+        damping: o.implicit_damping,
+        en: cd.en,
+        contact: if o.rolling_mobilised {
+            PairContact::RollingMobilised
+        } else {
+            PairContact::Touching
+        },
+        sliding: ft2 >= cap * cap * (1.0 - 1e-9),
+    };
+    (fi, fj)
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx512 {
+    use super::super::neighbor::Pair;
+    use super::super::{PairAux, PairContact};
+    use super::Particles;
+    use crate::solver::contact::batch::{self, PairIn};
+    use crate::solver::contact::lanes::F8;
+    use crate::solver::contact::{ContactHistory, ForceData};
+    use crate::solver::material::PairParams;
+    use std::arch::x86_64::*;
+
+    /// Pairs per piece of the parallel pass.
+    pub(super) const CHUNK: usize = 256;
+    /// f64 slots of a [`Pair`] (layout asserted in `neighbor`).
+    const PAIR_SLOTS: i64 = 10;
+    const SHIFT_SLOT: i64 = 1;
+    const SHEAR_SLOT: i64 = 4;
+    const R_TORQUE_SLOT: i64 = 7;
+
+    /// The pairs of one chunk: first which of them touch (8 at a time, the kernel's own test
+    /// `!(rsq >= radsum^2)` on the same operations, so the same answer), the others cleared;
+    /// then the touching ones, 8 at a time, through [`batch::pair`]. A last group's missing
+    /// lanes repeat its first pair and are not written back.
+    ///
+    /// # Safety
+    /// avx512f; `pairs`, `out`, `aux` of equal length <= [`CHUNK`]; particle indices in
+    /// bounds of `s`.
+    #[target_feature(enable = "avx512f")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn chunk(
+        pairs: &mut [Pair],
+        out: &mut [(ForceData, ForceData)],
+        aux: &mut [PairAux],
+        sum: &mut [ForceData],
+        s: Particles,
+        params: &PairParams,
+        update_history: bool,
+    ) {
+        let n = pairs.len();
+        assert!((out.is_empty() || out.len() == n) && aux.len() == n && n <= CHUNK);
+        let (xb, vb, wb) = (
+            s.x.as_ptr() as *const f64,
+            s.v.as_ptr() as *const f64,
+            s.omega.as_ptr() as *const f64,
+        );
+        let (rb, mb) = (s.radius.as_ptr(), s.mass.as_ptr());
+        let pb = pairs.as_ptr() as *const f64;
+        // per lane: pair k (chunk-local), its particles i and j
+        let mut kk = [0i64; 8];
+        let mut ii = [0i64; 8];
+        let mut jj = [0i64; 8];
+        // macros, not closures: everything here must be compiled with avx512f
+        macro_rules! lanes_of {
+            ($ks:expr, $count:expr) => {{
+                for l in 0..8 {
+                    let k = $ks[if l < $count { l } else { 0 }] as usize;
+                    kk[l] = k as i64 * PAIR_SLOTS;
+                    ii[l] = pairs[k].i as i64;
+                    jj[l] = pairs[k].j as i64;
+                }
+                let vk = _mm512_loadu_si512(kk.as_ptr() as *const _);
+                let vi = _mm512_loadu_si512(ii.as_ptr() as *const _);
+                let vj = _mm512_loadu_si512(jj.as_ptr() as *const _);
+                (vk, vi, vj)
+            }};
+        }
+        macro_rules! three {
+            ($base:expr, $idx:expr) => {
+                [
+                    F8::gather($base, $idx),
+                    F8::gather($base, _mm512_add_epi64($idx, _mm512_set1_epi64(1))),
+                    F8::gather($base, _mm512_add_epi64($idx, _mm512_set1_epi64(2))),
+                ]
+            };
+        }
+        macro_rules! times3 {
+            ($v:expr) => {
+                _mm512_add_epi64(_mm512_add_epi64($v, $v), $v)
+            };
+        }
+        // 1. which pairs touch
+        let mut touching = [0u16; CHUNK];
+        let mut nt = 0;
+        let mut k0 = 0;
+        while k0 < n {
+            let count = (n - k0).min(8);
+            let mut ks = [0u16; 8];
+            for (l, k) in ks.iter_mut().enumerate().take(count) {
+                *k = (k0 + l) as u16;
+            }
+            let (vk, vi, vj) = lanes_of!(ks, count);
+            let (i3, j3) = (times3!(vi), times3!(vj));
+            let xi = three!(xb, i3);
+            let xj = three!(xb, j3);
+            let shift = three!(pb, _mm512_add_epi64(vk, _mm512_set1_epi64(SHIFT_SLOT)));
+            let touch = batch::touching(xi, xj, shift, F8::gather(rb, vi), F8::gather(rb, vj));
+            let bits = touch.bits();
+            for l in 0..count {
+                let k = k0 + l;
+                if (bits >> l) & 1 == 1 {
+                    touching[nt] = k as u16;
+                    nt += 1;
+                } else {
+                    if !out.is_empty() {
+                        out[k] = Default::default();
+                    }
+                    aux[k] = PairAux::default();
+                }
+            }
+            k0 += count;
+        }
+        // 2. the touching pairs
+        let mut t0 = 0;
+        while t0 < nt {
+            let count = (nt - t0).min(8);
+            let ks = &touching[t0..t0 + count];
+            let (vk, vi, vj) = lanes_of!(ks, count);
+            let (i3, j3) = (times3!(vi), times3!(vj));
+            let inp = PairIn {
+                xi: three!(xb, i3),
+                xj: three!(xb, j3),
+                shift: three!(pb, _mm512_add_epi64(vk, _mm512_set1_epi64(SHIFT_SLOT))),
+                radi: F8::gather(rb, vi),
+                radj: F8::gather(rb, vj),
+                mi: F8::gather(mb, vi),
+                mj: F8::gather(mb, vj),
+                vi: three!(vb, i3),
+                vj: three!(vb, j3),
+                wi: three!(wb, i3),
+                wj: three!(wb, j3),
+                shear: three!(pb, _mm512_add_epi64(vk, _mm512_set1_epi64(SHEAR_SLOT))),
+                r_torque: three!(pb, _mm512_add_epi64(vk, _mm512_set1_epi64(R_TORQUE_SLOT))),
+            };
+            let o = batch::pair(&inp, params, update_history);
+            macro_rules! arr {
+                ($v:expr) => {
+                    [$v[0].to_array(), $v[1].to_array(), $v[2].to_array()]
+                };
+            }
+            let (fi, ti, fj, tj) = (arr!(o.fi), arr!(o.ti), arr!(o.fj), arr!(o.tj));
+            let (sh, rt, en) = (arr!(o.shear), arr!(o.r_torque), arr!(o.en));
+            let damping = o.damping.to_array();
+            let (touch, mob, slide) = (o.touch.bits(), o.mobilised.bits(), o.sliding.bits());
+            for (l, &k) in ks.iter().enumerate() {
+                let k = k as usize;
+                let at = |a: &[[f64; 8]; 3]| [a[0][l], a[1][l], a[2][l]];
+                let (di, dj) = (
+                    ForceData {
+                        delta_f: at(&fi),
+                        delta_torque: at(&ti),
+                    },
+                    ForceData {
+                        delta_f: at(&fj),
+                        delta_torque: at(&tj),
+                    },
+                );
+                super::accumulate(sum, pairs[k].i as usize, pairs[k].j as usize, &di, &dj);
+                if !out.is_empty() {
+                    out[k] = (di, dj);
+                }
+                let bit = |m: u8| (m >> l) & 1 == 1;
+                debug_assert!(bit(touch));
+                aux[k] = PairAux {
+                    damping: damping[l],
+                    en: at(&en),
+                    contact: match (bit(touch), bit(mob)) {
+                        (false, _) => PairContact::Apart,
+                        (true, false) => PairContact::Touching,
+                        (true, true) => PairContact::RollingMobilised,
+                    },
+                    sliding: bit(slide),
+                };
+                if update_history {
+                    pairs[k].hist = ContactHistory {
+                        shear: at(&sh),
+                        r_torque: at(&rt),
+                    };
+                }
+            }
+            t0 += count;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::ShearSim;
+    use super::*;
+    use crate::packing::loose_packing;
+    use crate::spec::shear::{Preset, ShearCase};
+    use crate::spec::RollingModel;
+
+    /// A dense sheared ci-preset state of `model` (mu_r 0.5, eta_r 0.5 where it applies):
+    /// compacted, then sheared so that contacts carry built-up, capped and new histories.
+    fn sheared(model: RollingModel) -> ShearSim {
+        let eta = if model.has_damping() { 0.5 } else { 0.0 };
+        let c = ShearCase::preset(Preset::Ci, model, 0.5, eta, 2).unwrap();
+        let mut s = ShearSim::new(&c, &loose_packing(&c));
+        s.setup(0.0).unwrap();
+        for _ in 0..c.compression_steps {
+            s.step().unwrap();
+        }
+        s.setup(c.stages[0].speed).unwrap();
+        for _ in 0..3000 {
+            s.step().unwrap();
+        }
+        s
+    }
+
+    /// Both paths over every listed pair of dense sheared states of every rolling model, with
+    /// and without history update, then 200 whole steps each: equal bits everywhere.
+    #[test]
+    fn avx512_pass_gives_the_scalar_bits_on_dense_sheared_states() {
+        if KernelPath::detect() != KernelPath::Avx512 {
+            // the scalar path is the only one here; the rest of the suite tests it
+            assert!(KernelPath::Avx512.checked("kernel").is_err());
+            eprintln!("no AVX-512F on this CPU: only the scalar path exists here");
+            return;
+        }
+        for model in [
+            RollingModel::Off,
+            RollingModel::Cdt,
+            RollingModel::Epsd,
+            RollingModel::Epsd2,
+            RollingModel::Epsd3,
+            RollingModel::EpsdImplicit,
+        ] {
+            let mut base = sheared(model);
+            // contacts that start now (zero history) besides the built-up ones: every 7th pair
+            for p in base.nl.pairs.iter_mut().step_by(7) {
+                p.hist = Default::default();
+            }
+            let (mut touching, mut sliding, mut mobilised, mut fresh) = (0, 0, 0, 0);
+            for update in [true, false] {
+                let mut a = base.clone();
+                let mut b = base.clone();
+                a.set_kernel(KernelPath::Scalar).unwrap();
+                b.set_kernel(KernelPath::Avx512).unwrap();
+                for s in [&mut a, &mut b] {
+                    s.keep_pair_forces = true;
+                    s.size_pair_buffers();
+                }
+                a.compute_forces(update).unwrap();
+                b.compute_forces(update).unwrap();
+                assert_eq!(a.nl.pairs.len(), b.nl.pairs.len());
+                for k in 0..a.nl.pairs.len() {
+                    let (pa, pb) = (&a.nl.pairs[k], &b.nl.pairs[k]);
+                    let bits = |h: &crate::solver::contact::ContactHistory| {
+                        (h.shear.map(f64::to_bits), h.r_torque.map(f64::to_bits))
+                    };
+                    assert_eq!(bits(&pa.hist), bits(&pb.hist), "{model:?} pair {k} history");
+                    let fb = |f: &(ForceData, ForceData)| {
+                        [f.0.delta_f, f.0.delta_torque, f.1.delta_f, f.1.delta_torque]
+                            .map(|v| v.map(f64::to_bits))
+                    };
+                    assert_eq!(
+                        fb(&a.pair_force[k]),
+                        fb(&b.pair_force[k]),
+                        "{model:?} pair {k} forces"
+                    );
+                    let (xa, xb) = (&a.pair_damp[k], &b.pair_damp[k]);
+                    assert_eq!(xa.damping.to_bits(), xb.damping.to_bits());
+                    assert_eq!(xa.en.map(f64::to_bits), xb.en.map(f64::to_bits));
+                    assert_eq!((xa.contact, xa.sliding), (xb.contact, xb.sliding));
+                    if update && xa.contact != PairContact::Apart {
+                        touching += 1;
+                        sliding += usize::from(xa.sliding);
+                        mobilised += usize::from(xa.contact == PairContact::RollingMobilised);
+                        fresh += usize::from(base.nl.pairs[k].hist == Default::default());
+                    }
+                }
+                assert_eq!(a.f.len(), b.f.len());
+                for (fa, fb) in a.f.iter().zip(&b.f) {
+                    assert_eq!(fa.map(f64::to_bits), fb.map(f64::to_bits));
+                }
+            }
+            // the states exercise what the kernel branches on
+            assert!(touching > 200, "{model:?}: {touching} touching pairs");
+            assert!(sliding > 0, "{model:?}: no sliding contact");
+            assert!(fresh > 0, "{model:?}: no new contact");
+            if model != RollingModel::Off {
+                assert!(mobilised > 0, "{model:?}: no contact at the rolling limit");
+            }
+            let mut a = base.clone();
+            let mut b = base;
+            a.set_kernel(KernelPath::Scalar).unwrap();
+            b.set_kernel(KernelPath::Avx512).unwrap();
+            for _ in 0..200 {
+                a.step().unwrap();
+                b.step().unwrap();
+            }
+            for (xa, xb) in a.x.iter().zip(&b.x).chain(a.omega.iter().zip(&b.omega)) {
+                assert_eq!(xa.map(f64::to_bits), xb.map(f64::to_bits), "{model:?}");
+            }
+            eprintln!(
+                "{model:?}: {touching} touching, {sliding} sliding, {mobilised} at the \
+                 rolling limit, {fresh} new: equal bits"
+            );
+        }
+    }
+}
