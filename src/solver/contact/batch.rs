@@ -132,11 +132,21 @@ pub fn pair<L: Lanes>(a: &PairIn<L>, p: &PairParams, update_history: bool) -> Pa
     let kn = L::splat(4.0 / 3.0 * p.y_eff) * sqrtval;
     let kt = st;
     let gamma_c = L::splat(-2.0 * SQRT_FIVE_OVER_SIX * p.beta_eff);
-    let gamman = gamma_c * (sn * meff).sqrt();
-    let gammat = if p.tangential_damping {
-        gamma_c * (st * meff).sqrt()
+    // With e = 1 (the paper's), beta = +0 and gamma_c = -0: `-0 * sqrt(x)` is -0 for every
+    // finite x >= 0 (Sn meff and St meff of a touching pair), so the square roots are skipped
+    // and the products written as the -0 they are.
+    let undamped = p.beta_eff == 0.0;
+    let gamman = if undamped {
+        gamma_c
     } else {
+        gamma_c * (sn * meff).sqrt()
+    };
+    let gammat = if !p.tangential_damping {
         zero
+    } else if undamped {
+        gamma_c
+    } else {
+        gamma_c * (st * meff).sqrt()
     };
     let fn_ = -gamman * vn + kn * deltan;
     let mut fi = [zero + fn_ * en[0], zero + fn_ * en[1], zero + fn_ * en[2]];
@@ -253,10 +263,16 @@ pub fn pair<L: Lanes>(a: &PairIn<L>, p: &PairParams, update_history: bool) -> Pa
                 RollingModel::Epsd | RollingModel::Epsd3 | RollingModel::EpsdImplicit
             ) && capped.not().any()
             {
-                let ai = a.mi * a.radi * a.radi;
-                let bj = a.mj * a.radj * a.radj;
-                let r_inertia = L::splat(1.4) * ai * bj / (ai + bj);
-                let r_coef = L::splat(p.coeff_roll_visc * 2.0) * (r_inertia * kr).sqrt();
+                // eta_r = 0: `(0 * 2) * sqrt(I_r k_r)` is +0 for the finite I_r k_r >= 0 of a
+                // touching pair, so the square root is skipped
+                let r_coef = if p.coeff_roll_visc == 0.0 {
+                    zero
+                } else {
+                    let ai = a.mi * a.radi * a.radi;
+                    let bj = a.mj * a.radj * a.radj;
+                    let r_inertia = L::splat(1.4) * ai * bj / (ai + bj);
+                    L::splat(p.coeff_roll_visc * 2.0) * (r_inertia * kr).sqrt()
+                };
                 if model == RollingModel::EpsdImplicit {
                     damping = L::select(capped, zero, r_coef);
                 } else {

@@ -453,8 +453,8 @@ impl ShearSim {
             .for_each(|(q, (((f, t), slots), (wf, imp)))| {
                 *f = [0.0; 3];
                 *t = [0.0; 3];
-                *imp = ([0.0; 6], [0.0; 3]);
                 if implicit {
+                    *imp = ([0.0; 6], [0.0; 3]);
                     for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
                         let PairAux {
                             damping: c, en: n, ..
@@ -475,7 +475,11 @@ impl ShearSim {
                         t[c] += a.delta_torque[c];
                     }
                 }
-                if !walls.particle(q, slots, f, t, wf, imp) {
+                // a particle without plate candidates holds no records
+                // (`drop_records_without_candidates`): nothing to mark, test or clean up
+                if walls.cstart[q] == walls.cstart[q + 1] {
+                    *wf = ([0.0; 3], [0.0; 3]);
+                } else if !walls.particle(q, slots, f, t, wf, imp) {
                     failed.store(true, std::sync::atomic::Ordering::Relaxed);
                 }
             });

@@ -85,7 +85,7 @@ pub(super) struct Particles<'a> {
 /// Fixed blocks of the pair list: each block adds its pairs' forces, in pair order, into its
 /// own per-particle sums, and the particles then add the blocks' sums in block order. The
 /// blocks do not depend on the thread count, so neither do the results.
-pub const BLOCKS: usize = 4;
+pub const BLOCKS: usize = 2;
 
 /// Adds one pair's increments to its particles' sums (i first, then j).
 #[inline(always)]
@@ -404,11 +404,15 @@ mod tests {
     use crate::spec::shear::{Preset, ShearCase};
     use crate::spec::RollingModel;
 
-    /// A dense sheared ci-preset state of `model` (mu_r 0.5, eta_r 0.5 where it applies):
-    /// compacted, then sheared so that contacts carry built-up, capped and new histories.
-    fn sheared(model: RollingModel) -> ShearSim {
-        let eta = if model.has_damping() { 0.5 } else { 0.0 };
-        let c = ShearCase::preset(Preset::Ci, model, 0.5, eta, 2).unwrap();
+    /// A dense sheared ci-preset state of `model` (mu_r 0.5, restitution `e`, eta_r `eta`
+    /// where it applies): compacted, then sheared so that contacts carry built-up, capped and
+    /// new histories.
+    fn sheared(model: RollingModel, e: f64, eta: f64) -> ShearSim {
+        let eta = if model.has_damping() { eta } else { 0.0 };
+        let c = ShearCase::preset(Preset::Ci, model, 0.5, eta, 2)
+            .unwrap()
+            .with_restitution("e", e)
+            .unwrap();
         let mut s = ShearSim::new(&c, &loose_packing(&c));
         s.setup(0.0).unwrap();
         for _ in 0..c.compression_steps {
@@ -422,7 +426,9 @@ mod tests {
     }
 
     /// Both paths over every listed pair of dense sheared states of every rolling model, with
-    /// and without history update, then 200 whole steps each: equal bits everywhere.
+    /// and without history update, then 200 whole steps each: equal bits everywhere. Two
+    /// materials: the paper's (e = 1, eta_r 0.5) and a damped one without rolling dashpot
+    /// (e = 0.5, eta_r 0), which take different branches of the kernel.
     #[test]
     fn avx512_pass_gives_the_scalar_bits_on_dense_sheared_states() {
         if KernelPath::detect() != KernelPath::Avx512 {
@@ -431,15 +437,18 @@ mod tests {
             eprintln!("no AVX-512F on this CPU: only the scalar path exists here");
             return;
         }
-        for model in [
+        for (model, e, eta) in [
             RollingModel::Off,
             RollingModel::Cdt,
             RollingModel::Epsd,
             RollingModel::Epsd2,
             RollingModel::Epsd3,
             RollingModel::EpsdImplicit,
-        ] {
-            let mut base = sheared(model);
+        ]
+        .into_iter()
+        .flat_map(|m| [(m, 1.0, 0.5), (m, 0.5, 0.0)])
+        {
+            let mut base = sheared(model, e, eta);
             // contacts that start now (zero history) besides the built-up ones: every 7th pair
             for p in base.nl.pairs.iter_mut().step_by(7) {
                 p.hist = Default::default();
@@ -507,7 +516,7 @@ mod tests {
                 assert_eq!(xa.map(f64::to_bits), xb.map(f64::to_bits), "{model:?}");
             }
             eprintln!(
-                "{model:?}: {touching} touching, {sliding} sliding, {mobilised} at the \
+                "{model:?}, e {e}, eta_r {eta}: {touching} touching, {sliding} sliding, {mobilised} at the \
                  rolling limit, {fresh} new: equal bits"
             );
         }

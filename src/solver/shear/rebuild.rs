@@ -147,6 +147,19 @@ impl ShearSim {
             self.wall_cand.extend(c);
             self.wall_start.push(self.wall_cand.len() as u32);
         }
+        self.drop_records_without_candidates();
+    }
+
+    /// Clears the plate contact records of every particle without candidates: what its next
+    /// evaluation would do (mark every record, test no triangle, clean up the unmarked), done
+    /// once here so that the force loop can skip such particles without reading their
+    /// records.
+    pub(super) fn drop_records_without_candidates(&mut self) {
+        for (q, slots) in self.wall.iter_mut().enumerate() {
+            if self.wall_start[q] == self.wall_start[q + 1] {
+                slots.n = 0;
+            }
+        }
     }
 }
 

@@ -237,6 +237,7 @@ impl ShearSim {
             };
             slots.n += 1;
         }
+        self.drop_records_without_candidates();
         self.size_pair_buffers();
         Ok(())
     }
