@@ -58,6 +58,10 @@ pub struct BenchRow {
     /// Native: wall time of each phase of the timed steps [s].
     #[serde(default)]
     pub phases: Option<PhaseTimes>,
+    /// Native, at the end of the timed steps: listed pairs, touching pairs and plate contacts
+    /// per particle.
+    #[serde(default)]
+    pub per_particle: Option<(f64, f64, f64)>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -203,27 +207,27 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 .num_threads(t)
                 .build()
                 .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-            let (secs, cpu, phases) =
-                pool.install(|| -> Result<(f64, Option<f64>, Option<PhaseTimes>)> {
-                    let mut s = ShearSim::new(&c, &state);
-                    s.set_kernel(kernel)?;
-                    s.setup(0.0)?;
+            type Timed = (f64, Option<f64>, Option<PhaseTimes>, (usize, usize, usize));
+            let (secs, cpu, phases, counts) = pool.install(|| -> Result<Timed> {
+                let mut s = ShearSim::new(&c, &state);
+                s.set_kernel(kernel)?;
+                s.setup(0.0)?;
+                s.step()?;
+                s.setup(speed)?;
+                for _ in 0..steps[0] {
                     s.step()?;
-                    s.setup(speed)?;
-                    for _ in 0..steps[0] {
-                        s.step()?;
-                    }
-                    s.setup(speed)?;
-                    s.time_phases(true);
-                    let (t0, c0) = (Instant::now(), process_cpu_seconds());
-                    for _ in 0..steps[1] {
-                        s.step()?;
-                    }
-                    let el = t0.elapsed().as_secs_f64();
-                    let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
-                    s.check_finite()?;
-                    Ok((el, cpu, s.phase_times()))
-                })?;
+                }
+                s.setup(speed)?;
+                s.time_phases(true);
+                let (t0, c0) = (Instant::now(), process_cpu_seconds());
+                for _ in 0..steps[1] {
+                    s.step()?;
+                }
+                let el = t0.elapsed().as_secs_f64();
+                let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
+                s.check_finite()?;
+                Ok((el, cpu, s.phase_times(), s.contact_counts()))
+            })?;
             if rss_native.is_none() {
                 rss_native = match (rss0, peak_rss()) {
                     (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
@@ -251,6 +255,16 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     .collect();
                 println!("           ns per particle-step: {}", parts.join(", "));
             }
+            let per_particle = (
+                counts.0 as f64 / n as f64,
+                counts.1 as f64 / n as f64,
+                counts.2 as f64 / n as f64,
+            );
+            println!(
+                "           per particle: {:.2} listed pairs, {:.2} touching pairs, {:.3} plate \
+                 contacts",
+                per_particle.0, per_particle.1, per_particle.2
+            );
             rows.push(BenchRow {
                 code: "native".into(),
                 workers: t,
@@ -262,6 +276,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 per_core: r / t as f64,
                 kernel: Some(kernel),
                 phases,
+                per_particle: Some(per_particle),
             });
         }
     }
@@ -288,6 +303,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 per_core: r / p as f64,
                 kernel: None,
                 phases: None,
+                per_particle: None,
             });
         }
     }

@@ -289,6 +289,12 @@ impl ShearSim {
         Ok(())
     }
 
+    /// Evaluates every force of the current state without updating any history (what a
+    /// run's setup does): for benchmarks of the force loops on a fixed state.
+    pub fn evaluate_forces(&mut self) -> Result<()> {
+        self.compute_forces(false)
+    }
+
     /// The pair pass's kernel path.
     pub fn kernel(&self) -> KernelPath {
         self.kernel

@@ -121,6 +121,17 @@ impl ShearSim {
         &self.f
     }
 
+    /// (listed pairs, touching pairs, particle-plate contacts) at the last force evaluation.
+    pub fn contact_counts(&self) -> (usize, usize, usize) {
+        let touching = self
+            .pair_damp
+            .iter()
+            .filter(|a| a.contact != PairContact::Apart)
+            .count();
+        let walls = self.wall.iter().map(|w| w.n as usize).sum();
+        (self.nl.pairs.len(), touching, walls)
+    }
+
     /// Neighbour rebuilds so far.
     pub fn neighbor_builds(&self) -> u64 {
         self.nl.builds

@@ -4,7 +4,7 @@
 //!   headers one contact at a time (also what the contact cases and the walls use);
 //! - [`KernelPath::Avx512`]: [`batch::pair`] on 8 consecutive listed pairs at once, their
 //!   particles' data gathered from the particle arrays, the results written back per pair.
-//!   Chosen at run time where the CPU has AVX-512F.
+//!   Chosen at run time where the CPU has AVX-512F and DQ.
 //!
 //! [`batch::pair`]: crate::solver::contact::batch::pair
 //!
@@ -47,7 +47,7 @@ impl KernelPath {
             return Err(Error::invalid(
                 field,
                 "avx512",
-                "scalar on this CPU (it has no AVX-512F)",
+                "scalar on this CPU (it lacks AVX-512F or AVX-512DQ)",
             ));
         }
         Ok(self)
@@ -65,6 +65,7 @@ fn avx512_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
         std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512dq")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -259,25 +260,24 @@ mod avx512 {
         );
         let (rb, mb) = (s.radius.as_ptr(), s.mass.as_ptr());
         let pb = pairs.as_ptr() as *const f64;
-        // per lane: pair k (chunk-local), its particles i and j
-        let mut kk = [0i64; 8];
-        let mut ii = [0i64; 8];
-        let mut jj = [0i64; 8];
-        // macros, not closures: everything here must be compiled with avx512f
+        // per lane: pair k (chunk-local) as an index vector; its particles i and j gathered
+        // from the pair records (u32 slots 0 and 1 of 20)
+        let pi = pairs.as_ptr() as *const i32;
+        let slots = _mm512_set1_epi64(PAIR_SLOTS);
         macro_rules! lanes_of {
-            ($ks:expr, $count:expr) => {{
-                for l in 0..8 {
-                    let k = $ks[if l < $count { l } else { 0 }] as usize;
-                    kk[l] = k as i64 * PAIR_SLOTS;
-                    ii[l] = pairs[k].i as i64;
-                    jj[l] = pairs[k].j as i64;
-                }
-                let vk = _mm512_loadu_si512(kk.as_ptr() as *const _);
-                let vi = _mm512_loadu_si512(ii.as_ptr() as *const _);
-                let vj = _mm512_loadu_si512(jj.as_ptr() as *const _);
+            ($k:expr) => {{
+                let k: __m512i = $k;
+                let vk = _mm512_mullo_epi64(k, slots);
+                let k2 = _mm512_add_epi64(vk, vk);
+                let vi = _mm512_cvtepu32_epi64(_mm512_i64gather_epi32::<4>(k2, pi));
+                let vj = _mm512_cvtepu32_epi64(_mm512_i64gather_epi32::<4>(
+                    _mm512_add_epi64(k2, _mm512_set1_epi64(1)),
+                    pi,
+                ));
                 (vk, vi, vj)
             }};
         }
+        let iota = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
         macro_rules! three {
             ($base:expr, $idx:expr) => {
                 [
@@ -292,35 +292,35 @@ mod avx512 {
                 _mm512_add_epi64(_mm512_add_epi64($v, $v), $v)
             };
         }
-        // 1. which pairs touch
-        let mut touching = [0u16; CHUNK];
+        // 1. which pairs touch; every state and force slot starts cleared (the touching
+        // pairs' are written in step 2)
+        aux.fill(PairAux::default());
+        out.fill(Default::default());
+        // (8 spare slots: the last group of step 2 reads 8 and writes back `count`)
+        let mut touching = [0u16; CHUNK + 8];
         let mut nt = 0;
         let mut k0 = 0;
         while k0 < n {
             let count = (n - k0).min(8);
-            let mut ks = [0u16; 8];
-            for (l, k) in ks.iter_mut().enumerate().take(count) {
-                *k = (k0 + l) as u16;
-            }
-            let (vk, vi, vj) = lanes_of!(ks, count);
+            // lanes beyond `count` repeat pair k0
+            let ks = _mm512_add_epi64(
+                _mm512_set1_epi64(k0 as i64),
+                _mm512_min_epi64(iota, _mm512_set1_epi64(count as i64 - 1)),
+            );
+            let (vk, vi, vj) = lanes_of!(ks);
             let (i3, j3) = (times3!(vi), times3!(vj));
             let xi = three!(xb, i3);
             let xj = three!(xb, j3);
             let shift = three!(pb, _mm512_add_epi64(vk, _mm512_set1_epi64(SHIFT_SLOT)));
             let touch = batch::touching(xi, xj, shift, F8::gather(rb, vi), F8::gather(rb, vj));
-            let bits = touch.bits();
-            for l in 0..count {
-                let k = k0 + l;
-                if (bits >> l) & 1 == 1 {
-                    touching[nt] = k as u16;
-                    nt += 1;
-                } else {
-                    if !out.is_empty() {
-                        out[k] = Default::default();
-                    }
-                    aux[k] = PairAux::default();
-                }
-            }
+            // the touching lanes' indices appended without branches (compress store)
+            let valid = touch.bits() & (0xffu16 >> (8 - count)) as u8;
+            _mm512_mask_cvtepi64_storeu_epi16(
+                touching.as_mut_ptr().add(nt) as *mut _,
+                0xff,
+                _mm512_maskz_compress_epi64(valid, ks),
+            );
+            nt += valid.count_ones() as usize;
             k0 += count;
         }
         // 2. the touching pairs
@@ -328,7 +328,11 @@ mod avx512 {
         while t0 < nt {
             let count = (nt - t0).min(8);
             let ks = &touching[t0..t0 + count];
-            let (vk, vi, vj) = lanes_of!(ks, count);
+            // lanes beyond `count` hold earlier or zero indices of this chunk: valid pairs,
+            // computed and not written back
+            let (vk, vi, vj) = lanes_of!(_mm512_cvtepu16_epi64(_mm_loadu_si128(
+                touching.as_ptr().add(t0) as *const _
+            )));
             let (i3, j3) = (times3!(vi), times3!(vj));
             let inp = PairIn {
                 xi: three!(xb, i3),
