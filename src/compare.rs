@@ -321,6 +321,17 @@ pub fn paired(a: &[f64], b: &[f64]) -> Option<Paired> {
     })
 }
 
+/// The paired test's rule: the codes disagree only when the paired mean difference is both
+/// significant (its 95 % CI excludes 0) and larger than `atol` (a difference that matters).
+/// Either alone is not enough: with 5 nightly points a 95 % CI excludes 0 by chance in about
+/// one night of four, and a difference within `atol` is agreement by definition.
+pub fn paired_agrees(p: &Paired, atol: f64) -> bool {
+    !(p.mean.abs() > p.ci95 && p.mean.abs() > atol)
+}
+
+/// Seeds a paired test needs before it is judged.
+pub const PAIRED_MIN_SEEDS: usize = 3;
+
 /// 95 % CI half-width of the mean of a time series from 10 block means (what one seed offers:
 /// consecutive samples are correlated, block means much less).
 pub fn block_ci95(v: &[f64]) -> f64 {
@@ -462,6 +473,26 @@ mod shear_tests {
         let h = lockstep(&c, &d, &["top_y", "mu"], 1e-6);
         assert_eq!(h.first_diverge_step, Some(30));
         assert_eq!(h.first_diverge_channel.as_deref(), Some("top_y"));
+    }
+
+    #[test]
+    fn paired_rule_needs_significance_and_size() {
+        let p = |mean: f64, ci95: f64| Paired {
+            n: 8,
+            mean,
+            ci95,
+            t: f64::NAN,
+            b_higher: 0,
+        };
+        assert!(paired_agrees(&p(0.03, 0.04), 0.02), "not significant");
+        assert!(
+            paired_agrees(&p(0.015, 0.01), 0.02),
+            "significant but within atol"
+        );
+        assert!(
+            !paired_agrees(&p(-0.03, 0.01), 0.02),
+            "significant and large"
+        );
     }
 
     #[test]

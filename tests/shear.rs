@@ -46,6 +46,7 @@ fn ci_preset_agrees_with_liggghts() {
             "normal_stress_liggghts",
             "normal_stress_native",
             "mu_steady",
+            "mu_paired",
             "slip_bottom",
             "slip_top"
         ]

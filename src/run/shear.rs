@@ -604,6 +604,29 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
             pass: dmu <= a.mu_atol && overlap,
         });
     }
+    let paired_dmu = match (&ls, &ns) {
+        (Some(l), Some(n)) => crate::compare::paired(&l.per_seed_mu, &n.per_seed_mu),
+        _ => None,
+    };
+    // the paired test (same packings in both codes) beside the CI-overlap rule, judged from
+    // PAIRED_MIN_SEEDS seeds on
+    if let Some(p) = paired_dmu
+        .as_ref()
+        .filter(|p| p.n >= crate::compare::PAIRED_MIN_SEEDS)
+    {
+        results.push(crate::compare::ChannelResult {
+            case: label.clone(),
+            model: model.clone(),
+            channel: "mu_paired".into(),
+            unit: "-".into(),
+            max_abs_err: p.mean.abs(),
+            max_rel_err: p.mean.abs() / p.ci95,
+            peak: ns.as_ref().map_or(f64::NAN, |n| n.mu.abs()),
+            worst_step: window.1,
+            rtol: a.mu_atol,
+            pass: crate::compare::paired_agrees(p, a.mu_atol),
+        });
+    }
     let profiles = CodeProfiles {
         liggghts: CodeProfiles::mean(
             &seeds
@@ -673,10 +696,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         profiles,
         seeds,
         results,
-        paired_dmu: match (&ls, &ns) {
-            (Some(l), Some(n)) => crate::compare::paired(&l.per_seed_mu, &n.per_seed_mu),
-            _ => None,
-        },
+        paired_dmu,
         liggghts_version: lig
             .as_ref()
             .map(|l| l.version())
@@ -762,7 +782,7 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
         say!(
             "  {:<22} {:>10.4e} (limit {:.2e} {})  {}",
             r.channel,
-            if r.channel == "mu_steady" {
+            if r.channel == "mu_steady" || r.channel == "mu_paired" {
                 r.max_abs_err
             } else {
                 r.max_rel_err
@@ -770,6 +790,7 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
             r.rtol,
             match r.channel.as_str() {
                 "mu_steady" => "abs, CIs must overlap",
+                "mu_paired" => "abs, fails only if its 95 % CI also excludes 0",
                 "slip_bottom" | "slip_top" => "x the CIs summed",
                 _ => "rel",
             },
