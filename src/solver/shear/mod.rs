@@ -101,11 +101,9 @@ pub struct ShearSim {
     rotation: Vec<[f64; 3]>,
     nl: NeighborList,
     xhold: Vec<[f64; 3]>,
-    /// Per pair, i's and j's force increments: kept only for observers (the replay's
-    /// contact dumps, tests), else empty; the pair pass adds straight into `acc`.
+    /// Per pair, i's and j's force increments (zero when apart).
     pair_force: Vec<(ForceData, ForceData)>,
-    keep_pair_forces: bool,
-    /// [`pairs::BLOCKS`] x n: each block of pairs' sums of force and torque per particle.
+    /// Per particle, the sum of its pair increments in pair order ([`pairs::pass`]).
     acc: Vec<ForceData>,
     /// epsd_implicit: per pair the dashpot coefficient and contact normal.
     pair_damp: Vec<PairAux>,
@@ -233,8 +231,7 @@ impl ShearSim {
             nl: NeighborList::default(),
             xhold: packing.position.clone(),
             pair_force: Vec::new(),
-            keep_pair_forces: false,
-            acc: vec![ForceData::default(); pairs::BLOCKS * n],
+            acc: vec![ForceData::default(); n],
             pair_damp: Vec::new(),
             imp: vec![([0.0; 6], [0.0; 3]); n],
             implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
@@ -303,10 +300,7 @@ impl ShearSim {
     /// Sizes the per-pair buffers for the current pair list (after a build).
     fn size_pair_buffers(&mut self) {
         let np = self.nl.pairs.len();
-        self.pair_force.resize(
-            if self.keep_pair_forces { np } else { 0 },
-            Default::default(),
-        );
+        self.pair_force.resize(np, Default::default());
         self.pair_damp.resize(np, PairAux::default());
     }
 
@@ -425,7 +419,6 @@ impl ShearSim {
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
         let acc = &self.acc;
-        let n = self.x.len();
         let pd = &self.pair_damp;
         let implicit = self.implicit;
         let torsion = params.torsion_torque;
@@ -473,13 +466,11 @@ impl ShearSim {
                         add_dashpot(imp, c, n, torsion, omega[other]);
                     }
                 }
-                // the pair blocks' sums in block order (pairs::pass)
-                for b in 0..pairs::BLOCKS {
-                    let a = &acc[b * n + q];
-                    for c in 0..3 {
-                        f[c] += a.delta_f[c];
-                        t[c] += a.delta_torque[c];
-                    }
+                // the pair sums (pairs::pass)
+                let a = &acc[q];
+                for c in 0..3 {
+                    f[c] += a.delta_f[c];
+                    t[c] += a.delta_torque[c];
                 }
                 // a particle without plate candidates holds no records
                 // (`drop_records_without_candidates`): nothing to mark, test or clean up

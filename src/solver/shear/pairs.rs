@@ -8,12 +8,12 @@
 //!
 //! [`batch::pair`]: crate::solver::contact::batch::pair
 //!
-//! Each pair writes only its own history and state; its force and torque increments go
-//! straight into per-particle sums of its block of the pair list ([`BLOCKS`], fixed pieces), in
-//! pair order, so the results do not depend on the thread count.
+//! Each pair writes only its own history, state and force slot, so the contacts are evaluated
+//! in parallel; the particles' sums are then made serially in pair order ([`pass`]), so the
+//! results do not depend on the thread count.
 
 use super::neighbor::Pair;
-use super::{pair_contact, PairAux, PairContact};
+use super::{pair_contact, PairAux, PairContact, HEAVY_CHUNK};
 use crate::error::{Error, Result};
 use crate::solver::contact::{surfaces_intersect, ForceData};
 use crate::solver::material::PairParams;
@@ -83,11 +83,6 @@ pub(super) struct Particles<'a> {
     pub mass: &'a [f64],
 }
 
-/// Fixed blocks of the pair list: each block adds its pairs' forces, in pair order, into its
-/// own per-particle sums, and the particles then add the blocks' sums in block order. The
-/// blocks do not depend on the thread count, so neither do the results.
-pub const BLOCKS: usize = 2;
-
 /// Adds one pair's increments to its particles' sums (i first, then j).
 #[inline(always)]
 fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &ForceData) {
@@ -100,9 +95,18 @@ fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &Fo
     }
 }
 
-/// Evaluates every listed pair: its state, (when `update_history`) its history, and its
-/// force and torque increments, added to block sums `acc` ([`BLOCKS`] x particles, see
-/// [`BLOCKS`]); `out` (empty, or one slot per pair) receives the increments too.
+/// Evaluates every listed pair: its state, (when `update_history`) its history and its force
+/// and torque increments `out` (zero when apart), and adds the increments to the per-particle
+/// sums `acc` in pair order. With one thread the sums are made as the pairs are evaluated;
+/// with more, the contacts are evaluated in parallel over fixed pieces and the sums made
+/// afterwards, serially in pair order. Both give the same bits.
+///
+/// Pair order is the order of the per-particle (CSR) sums this pass replaced, so the results
+/// are the bits of before (a whole ci run, native.csv identical to the previous binary's).
+/// Per-block sums added up per particle would parallelise the sums but re-associate almost
+/// every particle's sum, since a particle's partners lie all over the pair list: measured,
+/// the quick night's replay at (1, 0.5) then fell short of the chaos envelope in one window
+/// (11 of 12 steps).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pass(
     path: KernelPath,
@@ -114,66 +118,59 @@ pub(super) fn pass(
     params: &PairParams,
     update_history: bool,
 ) {
-    let n = s.x.len();
-    assert!(acc.len() == BLOCKS * n && aux.len() == pairs.len());
-    assert!(out.is_empty() || out.len() == pairs.len());
-    let per = pairs.len().div_ceil(BLOCKS).max(1);
-    // the blocks: pairs, states, optional force slots and sums, split at fixed places
-    let mut blocks = Vec::with_capacity(BLOCKS);
-    let (mut p_rest, mut a_rest, mut o_rest, mut s_rest) = (pairs, aux, out, acc);
-    for _ in 0..BLOCKS {
-        let m = per.min(p_rest.len());
-        let (p, pr) = p_rest.split_at_mut(m);
-        let (a, ar) = a_rest.split_at_mut(m);
-        let (o, or) = o_rest.split_at_mut(if o_rest.is_empty() { 0 } else { m });
-        let (sum, sr) = s_rest.split_at_mut(n);
-        blocks.push((p, a, o, sum));
-        (p_rest, a_rest, o_rest, s_rest) = (pr, ar, or, sr);
-    }
-    blocks.into_par_iter().for_each(|(p, a, o, sum)| {
-        sum.fill(ForceData::default());
-        match path {
-            KernelPath::Scalar => {
-                for k in 0..p.len() {
-                    let (fi, fj) = scalar_one(&mut p[k], &mut a[k], s, params, update_history);
-                    accumulate(sum, p[k].i as usize, p[k].j as usize, &fi, &fj);
-                    if !o.is_empty() {
-                        o[k] = (fi, fj);
-                    }
-                }
+    assert!(acc.len() == s.x.len() && aux.len() == pairs.len() && out.len() == pairs.len());
+    acc.fill(ForceData::default());
+    let serial = rayon::current_num_threads() == 1;
+    match path {
+        KernelPath::Scalar if serial => {
+            for ((p, o), a) in pairs.iter_mut().zip(out.iter_mut()).zip(aux.iter_mut()) {
+                *o = scalar_one(p, a, s, params, update_history);
+                accumulate(acc, p.i as usize, p.j as usize, &o.0, &o.1);
             }
-            KernelPath::Avx512 => {
-                #[cfg(target_arch = "x86_64")]
-                {
-                    assert!(avx512_available(), "the AVX-512 path needs avx512f");
-                    let c = avx512::CHUNK;
-                    for start in (0..p.len()).step_by(c) {
-                        let end = (start + c).min(p.len());
-                        let oc = if o.is_empty() {
-                            &mut [][..]
-                        } else {
-                            &mut o[start..end]
-                        };
-                        // SAFETY: avx512f checked above; the slices have equal lengths <=
-                        // CHUNK (or `oc` is empty); particle indices are below n = sum.len().
+            return;
+        }
+        KernelPath::Scalar => pairs
+            .par_iter_mut()
+            .zip(out.par_iter_mut().zip(aux.par_iter_mut()))
+            .with_min_len(HEAVY_CHUNK)
+            .for_each(|(p, (o, a))| *o = scalar_one(p, a, s, params, update_history)),
+        KernelPath::Avx512 => {
+            #[cfg(target_arch = "x86_64")]
+            {
+                assert!(
+                    avx512_available(),
+                    "the AVX-512 path needs avx512f and avx512dq"
+                );
+                let c = avx512::CHUNK;
+                if serial {
+                    let chunks = pairs
+                        .chunks_mut(c)
+                        .zip(out.chunks_mut(c).zip(aux.chunks_mut(c)));
+                    for (p, (o, a)) in chunks {
+                        // SAFETY: avx512f/dq checked above; the chunks have equal lengths <=
+                        // CHUNK; every particle index of a pair is below the particle count.
                         unsafe {
-                            avx512::chunk(
-                                &mut p[start..end],
-                                oc,
-                                &mut a[start..end],
-                                sum,
-                                s,
-                                params,
-                                update_history,
-                            )
+                            avx512::chunk(p, o, a, Some(&mut *acc), s, params, update_history)
                         }
                     }
+                    return;
                 }
-                #[cfg(not(target_arch = "x86_64"))]
-                unreachable!("KernelPath::Avx512 is only selected on x86_64")
+                pairs
+                    .par_chunks_mut(c)
+                    .zip(out.par_chunks_mut(c).zip(aux.par_chunks_mut(c)))
+                    .for_each(|(p, (o, a))| {
+                        // SAFETY: as above.
+                        unsafe { avx512::chunk(p, o, a, None, s, params, update_history) }
+                    });
             }
+            #[cfg(not(target_arch = "x86_64"))]
+            unreachable!("KernelPath::Avx512 is only selected on x86_64")
         }
-    });
+    }
+    for (p, o) in pairs.iter().zip(out.iter()) {
+        // apart pairs add zeros: no bit changes (a sum started at +0 is never -0)
+        accumulate(acc, p.i as usize, p.j as usize, &o.0, &o.1);
+    }
 }
 
 /// One pair by the scalar kernels: its state and history; returns i's and j's increments
@@ -246,13 +243,13 @@ mod avx512 {
         pairs: &mut [Pair],
         out: &mut [(ForceData, ForceData)],
         aux: &mut [PairAux],
-        sum: &mut [ForceData],
+        mut sum: Option<&mut [ForceData]>,
         s: Particles,
         params: &PairParams,
         update_history: bool,
     ) {
         let n = pairs.len();
-        assert!((out.is_empty() || out.len() == n) && aux.len() == n && n <= CHUNK);
+        assert!(out.len() == n && aux.len() == n && n <= CHUNK);
         let (xb, vb, wb) = (
             s.x.as_ptr() as *const f64,
             s.v.as_ptr() as *const f64,
@@ -372,10 +369,10 @@ mod avx512 {
                         delta_torque: at(&tj),
                     },
                 );
-                super::accumulate(sum, pairs[k].i as usize, pairs[k].j as usize, &di, &dj);
-                if !out.is_empty() {
-                    out[k] = (di, dj);
+                if let Some(acc) = sum.as_deref_mut() {
+                    super::accumulate(acc, pairs[k].i as usize, pairs[k].j as usize, &di, &dj);
                 }
+                out[k] = (di, dj);
                 let bit = |m: u8| (m >> l) & 1 == 1;
                 debug_assert!(bit(touch));
                 aux[k] = PairAux {
@@ -463,10 +460,6 @@ mod tests {
                 let mut b = base.clone();
                 a.set_kernel(KernelPath::Scalar).unwrap();
                 b.set_kernel(KernelPath::Avx512).unwrap();
-                for s in [&mut a, &mut b] {
-                    s.keep_pair_forces = true;
-                    s.size_pair_buffers();
-                }
                 a.compute_forces(update).unwrap();
                 b.compute_forces(update).unwrap();
                 assert_eq!(a.nl.pairs.len(), b.nl.pairs.len());

@@ -248,8 +248,6 @@ impl ShearSim {
     /// post_force_pgl: `shearupdate = 0`, end-of-step velocities and plate velocities).
     pub fn observe_contacts(&self) -> Result<(Vec<PairObservation>, Vec<WallObservation>)> {
         let mut probe = self.clone();
-        probe.keep_pair_forces = true;
-        probe.size_pair_buffers();
         probe.compute_forces(false)?;
         // LIGGGHTS reports a pair across a periodic seam from the copy owned by the higher
         // atom id, whose partner is a ghost atom: ghosts got their velocities at the last
