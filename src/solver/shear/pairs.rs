@@ -452,16 +452,9 @@ mod tests {
             eprintln!("no AVX-512F on this CPU: only the scalar path exists here");
             return;
         }
-        for (model, e, eta) in [
-            RollingModel::Off,
-            RollingModel::Cdt,
-            RollingModel::Epsd,
-            RollingModel::Epsd2,
-            RollingModel::Epsd3,
-            RollingModel::EpsdImplicit,
-        ]
-        .into_iter()
-        .flat_map(|m| [(m, 1.0, 0.5), (m, 0.5, 0.0)])
+        for (model, e, eta) in RollingModel::ALL
+            .into_iter()
+            .flat_map(|m| [(m, 1.0, 0.5), (m, 0.5, 0.0)])
         {
             let mut base = sheared(model, e, eta);
             // contacts that start now (zero history) besides the built-up ones: every 7th pair
