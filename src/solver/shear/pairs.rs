@@ -167,24 +167,10 @@ pub(super) fn pass(
             unreachable!("KernelPath::Avx512 is only selected on x86_64")
         }
     }
-    // each thread sums a range of particles, scanning the pairs in order: every particle's
-    // sum keeps pair order whatever the ranges (apart pairs add zeros: no bit changes, a sum
-    // started at +0 is never -0)
-    let per = acc.len().div_ceil(rayon::current_num_threads()).max(1);
-    let (pairs, out) = (&*pairs, &*out);
-    acc.par_chunks_mut(per).enumerate().for_each(|(t, part)| {
-        let lo = t * per;
-        for (p, o) in pairs.iter().zip(out) {
-            for (q, d) in [(p.i as usize, &o.0), (p.j as usize, &o.1)] {
-                if let Some(a) = q.checked_sub(lo).and_then(|k| part.get_mut(k)) {
-                    for c in 0..3 {
-                        a.delta_f[c] += d.delta_f[c];
-                        a.delta_torque[c] += d.delta_torque[c];
-                    }
-                }
-            }
-        }
-    });
+    for (p, o) in pairs.iter().zip(out.iter()) {
+        // apart pairs add zeros: no bit changes (a sum started at +0 is never -0)
+        accumulate(acc, p.i as usize, p.j as usize, &o.0, &o.1);
+    }
 }
 
 /// One pair by the scalar kernels: its state and history; returns i's and j's increments
