@@ -25,13 +25,9 @@
 //!    the cap; cdt `M = w ((((mu_r kn) deltan) reff) / |w|)`; `ti -= M`, `tj += M`.
 
 use super::lanes::{select3, Lanes, Mask};
+use super::normal::SQRT_FIVE_OVER_SIX;
 use crate::solver::material::PairParams;
 use crate::spec::RollingModel;
-
-/// sqrt(5/6) as the literal in normal_model_hertz.h (the same constant as `normal::hertz`).
-#[allow(clippy::excessive_precision)]
-const SQRT_FIVE_OVER_SIX: f64 =
-    0.912_870_929_175_276_855_761_616_304_668_003_556_587_907_824_996_638_75;
 
 /// Inputs of a lane's pair: both particles' state, the image shift of j and the history.
 #[derive(Clone, Copy)]

@@ -5,7 +5,7 @@ use crate::solver::material::PairParams;
 
 /// sqrt(5/6) as the literal in normal_model_hertz.h.
 #[allow(clippy::excessive_precision)]
-const SQRT_FIVE_OVER_SIX: f64 =
+pub(crate) const SQRT_FIVE_OVER_SIX: f64 =
     0.912_870_929_175_276_855_761_616_304_668_003_556_587_907_824_996_638_75;
 
 /// What the normal model hands to the later stages (LIGGGHTS writes these into sidata).
