@@ -40,10 +40,26 @@ pub fn compare(
     rtol: f64,
 ) -> Result<Vec<ChannelResult>> {
     if a.columns != b.columns {
+        let first = (0..a.columns.len().max(b.columns.len()))
+            .find(|&i| a.columns.get(i) != b.columns.get(i))
+            .unwrap_or(0);
+        let name = |c: Option<&String>| c.map_or("none".to_string(), |c| format!("`{c}`"));
         return Err(Error::Mismatch(format!(
-            "{case}/{model}: the two series have different columns ({} vs {})",
+            "{case}/{model}: the two series have different columns ({} and {} columns; \
+             column {} is {} in one and {} in the other)",
             a.columns.len(),
-            b.columns.len()
+            b.columns.len(),
+            first + 1,
+            name(a.columns.get(first)),
+            name(b.columns.get(first))
+        )));
+    }
+    if a.rows.is_empty() || b.rows.is_empty() {
+        return Err(Error::Mismatch(format!(
+            "{case}/{model}: a series has no rows ({} and {}): a comparison of nothing \
+             is not an agreement",
+            a.rows.len(),
+            b.rows.len()
         )));
     }
     if a.steps != b.steps {
@@ -120,6 +136,25 @@ mod tests {
         assert!(r[1].pass);
         assert_eq!(r[1].peak, 5.0);
         assert!((r[1].max_rel_err - 2e-21).abs() < 1e-30);
+    }
+
+    #[test]
+    fn series_without_rows_are_an_error_not_an_agreement() {
+        let a = series(&[]);
+        let e = compare("c", "m", &a, &a, 1e-9).unwrap_err().to_string();
+        assert!(e.contains("no rows"), "{e}");
+    }
+
+    #[test]
+    fn other_columns_name_the_first_difference() {
+        let a = series(&[[1.0, 0.0, 0.0]]);
+        let mut b = a.clone();
+        b.columns[1] = "ft_z[N]".into();
+        let e = compare("c", "m", &a, &b, 1e-9).unwrap_err().to_string();
+        assert!(
+            e.contains("column 2 is `ft_x[N]` in one and `ft_z[N]`"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -112,6 +112,7 @@ impl Liggghts {
                 break s;
             }
             if start.elapsed() > self.timeout {
+                kill_tree(child.id());
                 let _ = child.kill();
                 let _ = child.wait();
                 return Err(self.failure(dir, format!("timed out after {:?}", self.timeout)));
@@ -120,12 +121,13 @@ impl Liggghts {
         };
         let log = std::fs::read_to_string(dir.join(LOG_NAME)).unwrap_or_default();
         if !status.success() || log.contains("ERROR") {
-            return Err(self.failure(dir, format!("exit status {status}")));
+            return Err(self.failure(dir, status.to_string()));
         }
         Ok(())
     }
 
     fn failure(&self, dir: &Path, reason: String) -> Error {
+        // `status.to_string()` reads "exit status: 1" or "signal: 9 (SIGKILL)"
         let log = dir.join(LOG_NAME);
         let text = std::fs::read_to_string(&log)
             .or_else(|_| std::fs::read_to_string(dir.join("screen.txt")))
@@ -411,6 +413,46 @@ pub fn last_loop_time(log: &Path) -> Result<(f64, u64)> {
             path: log.to_path_buf(),
             msg: "no `Loop time of` line".into(),
         })
+}
+
+/// Kills every descendant of process `pid` (a wrapper script's LIGGGHTS, the ranks under
+/// `mpirun`), deepest first, so a timeout leaves nothing running. The process itself is left
+/// to the caller. The tree is read again until no descendant is left (a dying wrapper may
+/// have started one more).
+pub fn kill_tree(pid: u32) {
+    use sysinfo::{Pid, ProcessRefreshKind, ProcessesToUpdate, Signal, System};
+    let Ok(mut sys) = System::new() else {
+        return; // no process table to read: only the direct child is killed
+    };
+    for _ in 0..20 {
+        sys.refresh_processes_specifics(
+            ProcessesToUpdate::All,
+            true,
+            ProcessRefreshKind::nothing(),
+        );
+        let root = Pid::from_u32(pid);
+        let mut tree = vec![root];
+        let mut k = 0;
+        while k < tree.len() {
+            let parent = tree[k];
+            tree.extend(
+                sys.processes()
+                    .iter()
+                    .filter(|(_, p)| p.parent() == Some(parent))
+                    .map(|(id, _)| *id),
+            );
+            k += 1;
+        }
+        if tree.len() == 1 {
+            return;
+        }
+        for id in tree[1..].iter().rev() {
+            if let Some(p) = sys.process(*id) {
+                p.kill_with(Signal::Kill);
+            }
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
 
 #[cfg(test)]

@@ -7,6 +7,12 @@ use dem_verify::run::Verdict;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // `verify ... | head`: end quietly when the reader goes away, as Unix tools do, instead
+    // of panicking on the broken pipe in println!
+    // SAFETY: restores the default disposition of one signal before any thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
     match run(Cli::parse()) {

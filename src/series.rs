@@ -140,6 +140,11 @@ impl Series {
 
     /// Writes the CSV (`step,<columns>`), atomically, values with 17 significant digits.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
+        write_atomic(path, &self.csv_bytes(path)?)
+    }
+
+    /// The CSV text [`Series::write_csv`] writes (`path` only names the file in errors).
+    pub fn csv_bytes(&self, path: &Path) -> Result<Vec<u8>> {
         let mut w = csv::Writer::from_writer(Vec::new());
         let csv_err = |source: csv::Error| Error::Csv {
             path: path.to_path_buf(),
@@ -153,11 +158,10 @@ impl Series {
             rec.extend(r.iter().map(|v| format!("{v:e}")));
             w.write_record(&rec).map_err(csv_err)?;
         }
-        let bytes = w.into_inner().map_err(|e| Error::Csv {
+        w.into_inner().map_err(|e| Error::Csv {
             path: path.to_path_buf(),
             source: e.into_error().into(),
-        })?;
-        write_atomic(path, &bytes)
+        })
     }
 
     /// Reads a CSV written by [`Series::write_csv`].
@@ -211,7 +215,27 @@ pub fn split_header(h: &str) -> (&str, &str) {
 /// - `shear[m]` and (epsd, epsd2, epsd3) `m_hist[N m]`: the contact history (`shearx..z`,
 ///   `r_torquex_old..z`) with particle 1 as `i`;
 /// - per particle k: `x_k`, `v_k`, `f_k`, `omega_k`, `torque_k`.
-pub fn contact_series(case: &Case, frames: &[Frame]) -> Series {
+///
+/// Every frame must hold the case's particles: LIGGGHTS drops an atom that leaves a fixed
+/// box without an error, and a dump can be cut short; such a frame is an error naming its
+/// step, not a comparison of what is left. No frames at all is an error too.
+pub fn contact_series(case: &Case, frames: &[Frame]) -> Result<Series> {
+    if frames.is_empty() {
+        return Err(Error::Mismatch(format!(
+            "{}: no output frames (an empty dump compares nothing)",
+            case.name
+        )));
+    }
+    let n = case.particles.len();
+    if let Some(bad) = frames.iter().find(|f| f.atoms.len() != n) {
+        return Err(Error::Mismatch(format!(
+            "{}: step {} holds {} particle(s), the case has {n} (an atom lost from the box, \
+             or a cut dump)",
+            case.name,
+            bad.step,
+            bad.atoms.len()
+        )));
+    }
     let mut s = Series::new();
     let vecs = |s: &mut Series, name: &str, unit: &str| {
         for c in ["x", "y", "z"] {
@@ -247,7 +271,12 @@ pub fn contact_series(case: &Case, frames: &[Frame]) -> Series {
                     r1 + case.particles[1].radius - r,
                 )
             }
-            (None, None) => unreachable!("validated: two particles without a wall"),
+            (None, None) => {
+                return Err(Error::Mismatch(format!(
+                    "{}: one particle and no wall: no contact to measure",
+                    case.name
+                )))
+            }
         };
         let (fn_, ft, mroll) = if fr.touching {
             let fn_ = dot(a.f, n);
@@ -285,7 +314,7 @@ pub fn contact_series(case: &Case, frames: &[Frame]) -> Series {
         s.steps.push(fr.step);
         s.rows.push(row);
     }
-    s
+    Ok(s)
 }
 
 #[cfg(test)]
@@ -309,6 +338,28 @@ mod tests {
         assert_eq!(ch.len(), 2);
         assert_eq!(ch[1].name, "ft");
         assert_eq!(ch[1].cols, vec![2, 3, 4]);
+    }
+
+    #[test]
+    fn lost_atom_or_empty_dump_is_an_error_naming_the_step() {
+        let case = crate::spec::builtin_case("rolling_plastic")
+            .unwrap()
+            .with_rolling(crate::spec::RollingModel::Epsd)
+            .validate()
+            .unwrap();
+        let mut frames = crate::solver::two_body::run(&case).unwrap();
+        assert!(contact_series(&case, &frames).is_ok());
+        let e = contact_series(&case, &[]).unwrap_err().to_string();
+        assert!(e.contains("no output frames"), "{e}");
+        let k = frames.len() / 2;
+        frames[k].atoms.pop();
+        let e = contact_series(&case, &frames).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("step {} holds 1 particle(s)", frames[k].step)),
+            "{e}"
+        );
+        frames[k].atoms.clear();
+        assert!(contact_series(&case, &frames).is_err());
     }
 
     #[test]

@@ -26,7 +26,7 @@ fn both(case: &Case) -> Vec<(&'static str, Series)> {
     vec![
         (
             "native",
-            contact_series(case, &two_body::run(case).unwrap()),
+            contact_series(case, &two_body::run(case).unwrap()).unwrap(),
         ),
         ("liggghts", Series::read_csv(&stored).unwrap()),
     ]

@@ -86,23 +86,38 @@ fn reference_mode_needs_no_liggghts() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
-#[test]
-fn perturbed_reference_is_a_disagreement_with_exit_1() {
-    // A perturbed stored reference must make the comparison fail with exit 1.
-    let dir = tempfile::tempdir().unwrap();
-    let refdir = dir.path().join("ref");
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/contact/rolling_elastic__epsd");
-    let dst = refdir.join("contact/rolling_elastic__epsd");
+/// Copies the stored reference of `rolling_elastic__epsd` into `refdir`, its CSV lines edited
+/// by `edit`; with `reseal` the provenance gets the edited file's row count and checksum (as
+/// if it had been stored so), else it keeps the original's.
+fn edited_reference(refdir: &Path, edit: impl Fn(&mut Vec<String>), reseal: bool) {
+    use sha2::Digest;
+    let name = "rolling_elastic__epsd";
+    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("reference/contact")
+        .join(name);
+    let dst = refdir.join("contact").join(name);
     std::fs::create_dir_all(&dst).unwrap();
     let csv = std::fs::read_to_string(src.join("liggghts.csv")).unwrap();
     let mut lines: Vec<String> = csv.lines().map(String::from).collect();
-    // Scale the normal force of one row by (1 + 1e-6).
-    let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
-    let v: f64 = cells[2].parse().unwrap();
-    cells[2] = format!("{:e}", v * (1.0 + 1e-6));
-    lines[20] = cells.join(",");
-    std::fs::write(dst.join("liggghts.csv"), lines.join("\n") + "\n").unwrap();
-    let o = verify(&[
+    edit(&mut lines);
+    let text = lines.join("\n") + "\n";
+    std::fs::write(dst.join("liggghts.csv"), &text).unwrap();
+    let mut prov: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(src.join("provenance.json")).unwrap())
+            .unwrap();
+    if reseal {
+        let sum: String = sha2::Sha256::digest(text.as_bytes())
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        prov["sha256"] = sum.into();
+        prov["rows"] = (lines.len() - 1).into();
+    }
+    std::fs::write(dst.join("provenance.json"), prov.to_string()).unwrap();
+}
+
+fn verify_against(refdir: &Path, out: &Path) -> Output {
+    verify(&[
         "contact",
         "--case",
         "rolling_elastic",
@@ -112,8 +127,28 @@ fn perturbed_reference_is_a_disagreement_with_exit_1() {
         "--reference-dir",
         refdir.to_str().unwrap(),
         "--out",
-        dir.path().join("out").to_str().unwrap(),
-    ]);
+        out.to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn perturbed_reference_is_a_disagreement_with_exit_1() {
+    // A perturbed stored reference (stored so: consistent provenance) must make the
+    // comparison fail with exit 1.
+    let dir = tempfile::tempdir().unwrap();
+    let refdir = dir.path().join("ref");
+    edited_reference(
+        &refdir,
+        |lines| {
+            // Scale the normal force of one row by (1 + 1e-6).
+            let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
+            let v: f64 = cells[2].parse().unwrap();
+            cells[2] = format!("{:e}", v * (1.0 + 1e-6));
+            lines[20] = cells.join(",");
+        },
+        true,
+    );
+    let o = verify_against(&refdir, &dir.path().join("out"));
     assert_eq!(
         o.status.code(),
         Some(1),
@@ -121,6 +156,76 @@ fn perturbed_reference_is_a_disagreement_with_exit_1() {
         String::from_utf8_lossy(&o.stdout)
     );
     assert!(String::from_utf8_lossy(&o.stdout).contains("DISAGREE"));
+}
+
+#[test]
+fn changed_reference_fails_its_checksum_with_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let refdir = dir.path().join("ref");
+    edited_reference(
+        &refdir,
+        |lines| lines[30] = lines[30].replace('e', "E"),
+        false,
+    );
+    let o = verify_against(&refdir, &dir.path().join("out"));
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("checksum"), "{}", stderr(&o));
+}
+
+#[test]
+fn incomplete_reference_is_an_error_never_an_agreement() {
+    // header only, one row, half the rows, one row deleted: each stored with a consistent
+    // provenance, so only the step check can catch them
+    type Cut = fn(&mut Vec<String>);
+    let cuts: [(&str, Cut); 4] = [
+        ("header only", |l| l.truncate(1)),
+        ("one row", |l| l.truncate(2)),
+        ("half the rows", |l| {
+            let n = l.len() / 2;
+            l.truncate(n)
+        }),
+        ("a deleted row", |l| {
+            l.remove(17);
+        }),
+    ];
+    for (what, cut) in cuts {
+        let dir = tempfile::tempdir().unwrap();
+        let refdir = dir.path().join("ref");
+        edited_reference(&refdir, cut, true);
+        let o = verify_against(&refdir, &dir.path().join("out"));
+        assert_eq!(o.status.code(), Some(2), "{what}: {}", stderr(&o));
+        assert!(stderr(&o).contains("incomplete"), "{what}: {}", stderr(&o));
+        // the failure is recorded, with the other cases' results, in summary.json
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join("out/summary.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(summary["pass"], false, "{what}");
+        assert_eq!(summary["errors"].as_array().unwrap().len(), 1, "{what}");
+    }
+}
+
+#[test]
+fn user_case_never_replaces_a_built_in_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = write_case(dir.path(), |t| t);
+    let o = verify(&[
+        "contact",
+        "--spec",
+        &spec,
+        "--update-reference",
+        "--reference-dir",
+        dir.path().join("ref").to_str().unwrap(),
+        "--liggghts",
+        "/nonexistent/liggghts",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("built-in case") && stderr(&o).contains("`name"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.path().join("ref").exists());
 }
 
 #[test]
@@ -160,7 +265,20 @@ fn unknown_case_and_model_list_the_valid_ones() {
 #[test]
 fn bad_case_files_name_the_field_and_range() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &str, &str); 6] = [
+    let cases: [(&str, &str, &str); 9] = [
+        // finite values whose derived deck numbers were not (the period of the spin, the
+        // power-of-two box)
+        (
+            "omega = [60.0, 80.0, 0.0]",
+            "omega = [1e-320, 0.0, 0.0]",
+            "particles[1].motion.omega",
+        ),
+        (
+            "position = [0.0, 0.0, 0.0]",
+            "position = [1e308, 0.0, 0.0]",
+            "particles[0].position",
+        ),
+        ("radius = 1.0e-3", "radius = 1.0e300", "particles[0].radius"),
         (
             "youngs_modulus = 7.0e10",
             "youngs_modulus = nan",
@@ -270,4 +388,62 @@ fn failing_liggghts_run_shows_the_log_tail() {
         e.contains("LIGGGHTS run failed") && e.contains("ERROR: Lost atoms"),
         "{e}"
     );
+}
+
+#[test]
+fn timeout_kills_what_a_wrapper_started() {
+    // a wrapper script whose "LIGGGHTS" (a sleep) is its child, not itself: the timeout
+    // must end both
+    let dir = tempfile::tempdir().unwrap();
+    let fake = dir.path().join("liggghts");
+    let marker = format!("{}", 86_400 + std::process::id() % 10_000);
+    std::fs::write(
+        &fake,
+        format!("#!/bin/sh\necho 'LIGGGHTS (wrapper)' > log.liggghts\nsleep {marker}\necho done\n"),
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--rolling",
+        "epsd",
+        "--liggghts",
+        fake.to_str().unwrap(),
+        "--timeout",
+        "1",
+        "--out",
+        dir.path().join("out").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("timed out"), "{}", stderr(&o));
+    let ps = std::process::Command::new("ps")
+        .args(["-eo", "args"])
+        .output()
+        .unwrap();
+    let left: Vec<String> = String::from_utf8_lossy(&ps.stdout)
+        .lines()
+        .filter(|l| l.contains(&format!("sleep {marker}")))
+        .map(String::from)
+        .collect();
+    assert!(left.is_empty(), "still running after the timeout: {left:?}");
+}
+
+#[test]
+fn list_into_a_closed_pipe_ends_quietly() {
+    // the reader is gone before verify writes (as `verify contact --list | head -1` once the
+    // head has its line): the write gets EPIPE every time
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let o = std::process::Command::new(common::verify_bin())
+        .args(["contact", "--list"])
+        .stdout(writer)
+        .stderr(std::process::Stdio::piped())
+        .output()
+        .unwrap();
+    use std::os::unix::process::ExitStatusExt;
+    assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
+    assert_eq!(o.status.signal(), Some(13), "{:?}", o.status);
 }

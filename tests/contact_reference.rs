@@ -24,6 +24,7 @@ fn native_matches_stored_reference_for_every_case() {
         )
         .unwrap();
         let native = contact_series(&case, &two_body::run(&case).unwrap())
+            .unwrap()
             .at_steps(&stored.steps)
             .unwrap();
         for r in compare(

@@ -170,7 +170,14 @@ fn native_only_resumes_and_writes_snapshots() {
 
 #[test]
 fn bad_shear_input_is_refused_with_reasons() {
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 12] = [
+        // step counts that wrapped, extremes that hung
+        (&["--strain", "1e300"], "stages[0] (--strain, --speeds)"),
+        (&["--speeds", "1e-300"], "stages[0] (--strain, --speeds)"),
+        (&["--mu-r", "1e9"], "0 ..= 10"),
+        (&["--tooth-height", "1"], "plates.tooth_height"),
+        (&["--tooth-height", "1e300"], "plates.tooth_height"),
+        (&["--tooth-wavelength", "2e-9"], "plates.tooth_wavelength"),
         (
             &["--rolling", "epsd2", "--mu-r", "0.5", "--eta-r", "0.5"],
             "eta_r acts only in epsd and epsd3",

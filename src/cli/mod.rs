@@ -13,7 +13,8 @@ use crate::error::{Error, Result};
 use crate::liggghts::Liggghts;
 use crate::report::{channel_table, worst_table};
 use crate::run::contact::{
-    contact_runs, read_reference_version, run_all, write_decks, ContactRequest, RollingChoice,
+    check_reference_target, contact_runs, read_reference_version, run_all, write_decks,
+    ContactRequest, RollingChoice,
 };
 use crate::run::{out_or_default, Engine, LiggghtsRequest, Verdict, CONTACT_TIMEOUT_S};
 use crate::spec::shear::Preset;
@@ -225,6 +226,11 @@ fn contact(a: ContactArgs) -> Result<Verdict> {
         m => RollingChoice::One(RollingModel::parse(m)?),
     };
     let runs = contact_runs(&a.case, a.spec.as_deref(), rolling)?;
+    if a.update_reference {
+        for c in &runs {
+            check_reference_target(&c.name, a.spec.is_some())?;
+        }
+    }
     let lig: Option<Liggghts> = if a.reference {
         None
     } else {
@@ -265,6 +271,17 @@ fn contact(a: ContactArgs) -> Result<Verdict> {
         against,
         version,
         |case, results, secs| {
+            let results = match results {
+                Ok(r) => r,
+                Err(e) => {
+                    println!(
+                        "{:<22} {:<6} ERROR ({secs:.1} s): {e}",
+                        case.name,
+                        case.models.rolling.keyword()
+                    );
+                    return;
+                }
+            };
             let pass = results.iter().all(|r| r.pass);
             let worst = results.iter().map(|r| r.max_rel_err).fold(0.0, f64::max);
             println!(

@@ -31,6 +31,16 @@ pub struct ContactSummary {
     pub results: Vec<ChannelResult>,
     /// Largest relative error per case and model.
     pub worst: Vec<Worst>,
+    /// Runs that could not be compared (the others still ran and are in `results`).
+    pub errors: Vec<CaseError>,
+}
+
+/// A run of a multi-case study that failed, with the error's text.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseError {
+    pub case: String,
+    pub model: String,
+    pub error: String,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -48,6 +58,7 @@ impl ContactSummary {
         liggghts_version: String,
         rtol: f64,
         results: Vec<ChannelResult>,
+        errors: Vec<CaseError>,
     ) -> Self {
         let mut worst: Vec<Worst> = Vec::new();
         for r in &results {
@@ -72,12 +83,13 @@ impl ContactSummary {
             }
         }
         ContactSummary {
-            pass: results.iter().all(|r| r.pass) && !results.is_empty(),
+            pass: results.iter().all(|r| r.pass) && !results.is_empty() && errors.is_empty(),
             against: against.into(),
             liggghts_version,
             rtol,
             results,
             worst,
+            errors,
         }
     }
 

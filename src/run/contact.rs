@@ -7,7 +7,7 @@ use crate::deck::{contact_deck, run_name, Deck};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::{read_contact_frames, Liggghts, LOG_NAME};
-use crate::report::ContactSummary;
+use crate::report::{CaseError, ContactSummary};
 use crate::series::{contact_series, Series};
 use crate::solver::two_body;
 use crate::spec::{builtin_case, builtin_names, Case, CaseFile, RollingModel};
@@ -69,9 +69,11 @@ fn write_deck(deck: &Deck, dir: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Runs every case ([`contact_one`]), tells `on_case` of each (its results and wall time [s]),
-/// writes `out/summary.json` and returns the summary. `against` names the LIGGGHTS side
-/// (`live` or `reference`), `version` its version.
+/// Runs every case ([`contact_one`]), tells `on_case` of each (its results or error, and wall
+/// time [s]), writes `out/summary.json` and returns the summary. A case that fails does not
+/// stop the others: its error is in the summary, and after the summary is written the
+/// failures are returned as [`Error::Cases`]. `against` names the LIGGGHTS side (`live` or
+/// `reference`), `version` its version.
 pub fn run_all(
     runs: &[Case],
     req: &ContactRequest,
@@ -79,17 +81,44 @@ pub fn run_all(
     out: &Path,
     against: &str,
     version: String,
-    on_case: impl Fn(&Case, &[ChannelResult], f64),
+    on_case: impl Fn(&Case, std::result::Result<&[ChannelResult], &Error>, f64),
 ) -> Result<ContactSummary> {
     let mut all = Vec::new();
+    let mut errors = Vec::new();
     for case in runs {
         let t0 = std::time::Instant::now();
-        let results = contact_one(case, req, lig, out)?;
-        on_case(case, &results, t0.elapsed().as_secs_f64());
-        all.extend(results);
+        match contact_one(case, req, lig, out) {
+            Ok(results) => {
+                on_case(case, Ok(&results), t0.elapsed().as_secs_f64());
+                all.extend(results);
+            }
+            Err(e) => {
+                on_case(case, Err(&e), t0.elapsed().as_secs_f64());
+                errors.push(CaseError {
+                    case: case.name.clone(),
+                    model: case.models.rolling.keyword().into(),
+                    error: e.to_string(),
+                });
+            }
+        }
     }
-    let summary = ContactSummary::new(against, version, req.rtol, all);
-    summary.write(&out.join("summary.json"))?;
+    let summary = ContactSummary::new(against, version, req.rtol, all, errors);
+    let path = out.join("summary.json");
+    summary.write(&path)?;
+    if !summary.errors.is_empty() {
+        let list: Vec<String> = summary
+            .errors
+            .iter()
+            .map(|e| format!("  {}/{}: {}", e.case, e.model, e.error))
+            .collect();
+        return Err(Error::Cases(format!(
+            "{} of {} contact run(s) could not be compared (the others' results are in {}):\n{}",
+            summary.errors.len(),
+            runs.len(),
+            path.display(),
+            list.join("\n")
+        )));
+    }
     Ok(summary)
 }
 
@@ -104,37 +133,38 @@ pub fn contact_one(
     let dir = out.join(&name);
     let deck = contact_deck(case);
     write_deck(&deck, &dir.join("deck"))?;
-    let reference_csv = a
-        .reference_dir
-        .join("contact")
-        .join(&name)
-        .join("liggghts.csv");
-    let lig_series = match lig {
+    let native_run = contact_series(case, &two_body::run(case)?)?;
+    let (lig_series, native) = match lig {
         None => {
-            if !reference_csv.is_file() {
+            let reference = read_reference(&a.reference_dir, &name)?;
+            // the native run at exactly the steps a complete reference keeps: a reference
+            // with rows missing (or of another case) is an error, never a shorter comparison
+            let native = native_run.decimate(REFERENCE_STRIDE);
+            if reference.steps != native.steps {
                 return Err(Error::Reference {
-                    path: reference_csv,
+                    path: reference_path(&a.reference_dir, &name),
                     msg: format!(
-                        "no stored LIGGGHTS output for {name} (built-in cases only; run \
-                         without --reference to use LIGGGHTS)"
+                        "it holds {} rows (steps {}), the case writes {} (every \
+                         {REFERENCE_STRIDE}th output step and the last, steps {}): the \
+                         reference is incomplete or of another case",
+                        reference.steps.len(),
+                        step_range(&reference.steps),
+                        native.steps.len(),
+                        step_range(&native.steps)
                     ),
                 });
             }
-            Series::read_csv(&reference_csv)?
+            (reference, native)
         }
         Some(l) => {
             let s = liggghts_contact_series(case, &deck, l, &dir)?;
             if a.update_reference {
                 store_reference(case, &s, l, &a.reference_dir)?;
             }
-            s
+            (s, native_run)
         }
     };
     lig_series.write_csv(&dir.join("liggghts.csv"))?;
-    let mut native = contact_series(case, &two_body::run(case)?);
-    if lig.is_none() {
-        native = native.at_steps(&lig_series.steps)?;
-    }
     native.write_csv(&dir.join("native.csv"))?;
     crate::report::contact::contact_plots(
         &dir,
@@ -171,31 +201,119 @@ pub fn liggghts_contact_series(
         3
     };
     let frames = read_contact_frames(tmp.path(), n_hist, case.wall.is_some())?;
-    Ok(contact_series(case, &frames))
+    contact_series(case, &frames)
 }
 
 /// Stored references keep every `REFERENCE_STRIDE`-th output step (and the last), to keep
 /// the repository small; `--reference` compares the native run at exactly those steps.
 pub const REFERENCE_STRIDE: u64 = 10;
 
+/// What a stored reference is and where it came from; `rows` and `sha256` (of liggghts.csv's
+/// bytes) let `--reference` refuse a file that was cut, edited or replaced.
 #[derive(serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 struct Provenance {
     liggghts_version: String,
     command: String,
     deck: String,
     date_utc: String,
+    rows: usize,
+    sha256: String,
+}
+
+fn reference_path(root: &Path, name: &str) -> PathBuf {
+    root.join("contact").join(name).join("liggghts.csv")
+}
+
+fn step_range(steps: &[u64]) -> String {
+    match (steps.first(), steps.last()) {
+        (Some(a), Some(b)) => format!("{a}..={b}"),
+        _ => "none".into(),
+    }
+}
+
+fn sha256_hex(bytes: &[u8]) -> String {
+    use sha2::Digest;
+    sha2::Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// Reads the stored reference of run `name`, checked against its provenance (row count and
+/// checksum).
+fn read_reference(root: &Path, name: &str) -> Result<Series> {
+    let csv_path = reference_path(root, name);
+    let prov_path = csv_path.with_file_name("provenance.json");
+    let err = |msg: String| Error::Reference {
+        path: csv_path.clone(),
+        msg,
+    };
+    if !csv_path.is_file() {
+        return Err(err(format!(
+            "no stored LIGGGHTS output for {name} (built-in cases only; run without \
+             --reference to use LIGGGHTS)"
+        )));
+    }
+    let prov_text = std::fs::read_to_string(&prov_path).map_err(|e| {
+        err(format!(
+            "its provenance {} cannot be read: {e}",
+            prov_path.display()
+        ))
+    })?;
+    let prov: Provenance = serde_json::from_str(&prov_text).map_err(|e| Error::JsonFile {
+        path: prov_path.clone(),
+        line: None,
+        source: e,
+    })?;
+    let bytes = std::fs::read(&csv_path).map_err(|e| Error::io(&csv_path, e))?;
+    let sum = sha256_hex(&bytes);
+    if sum != prov.sha256 {
+        return Err(err(format!(
+            "checksum {sum} differs from the provenance's {} (the file was changed after \
+             it was stored; restore it or store it again with --update-reference)",
+            prov.sha256
+        )));
+    }
+    let s = Series::read_csv(&csv_path)?;
+    if s.rows.len() != prov.rows {
+        return Err(err(format!(
+            "{} rows, the provenance says {}",
+            s.rows.len(),
+            prov.rows
+        )));
+    }
+    Ok(s)
+}
+
+/// Refuses to store a reference for a user's case (`--spec`) under a built-in case's name:
+/// the built-in reference would be replaced and then agree with itself.
+pub fn check_reference_target(case_name: &str, from_spec: bool) -> Result<()> {
+    if from_spec && builtin_names().any(|b| b == case_name) {
+        return Err(Error::invalid(
+            "name (case file, with --update-reference)",
+            case_name,
+            "a name that is not a built-in case's (the built-in references are not \
+             overwritten by a user's case; rename the case)",
+        ));
+    }
+    Ok(())
 }
 
 fn store_reference(case: &Case, s: &Series, lig: &Liggghts, root: &Path) -> Result<()> {
     let name = run_name(case);
     let dir = root.join("contact").join(&name);
-    s.decimate(REFERENCE_STRIDE)
-        .write_csv(&dir.join("liggghts.csv"))?;
+    let csv_path = dir.join("liggghts.csv");
+    let kept = s.decimate(REFERENCE_STRIDE);
+    let bytes = kept.csv_bytes(&csv_path)?;
+    write_atomic(&csv_path, &bytes)?;
     let prov = Provenance {
         liggghts_version: lig.version(),
         command: format!("{} -in in.deck -log log.liggghts", lig.binary.display()),
         deck: format!("liggghts_inputs/contact/{name}/in.deck"),
         date_utc: utc_stamp(),
+        rows: kept.rows.len(),
+        sha256: sha256_hex(&bytes),
     };
     write_atomic(
         &dir.join("provenance.json"),

@@ -186,6 +186,16 @@ impl Material {
         }
         non_negative("material.friction", m.friction)?;
         non_negative(&rf, m.rolling_friction)?;
+        // coefficients far beyond any granular material: the rolling stiffness grows as
+        // mu_r^2, and mu_r = 1e9 blows a run up within steps
+        for (f, v) in [
+            ("material.friction", m.friction),
+            (rf.as_str(), m.rolling_friction),
+        ] {
+            if v > MAX_FRICTION {
+                return Err(Error::invalid(f, v, format!("0 ..= {MAX_FRICTION}")));
+            }
+        }
         non_negative(&rd, m.rolling_damping)?;
         finite("material.rolling_stiffness", m.rolling_stiffness)?;
         if m.rolling_stiffness < 1.0 {
@@ -414,21 +424,31 @@ impl CaseFile {
         for (k, p) in self.particles.iter().enumerate() {
             let f = |s: &str| format!("particles[{k}].{s}");
             positive(&f("radius"), p.radius)?;
-            finite3(&f("position"), p.position)?;
-            finite3(&f("velocity"), p.velocity)?;
-            finite3(&f("omega"), p.omega)?;
+            within(&f("radius"), p.radius, MAX_LENGTH_M, "m")?;
+            bounded3(&f("position"), p.position, MAX_LENGTH_M, "m")?;
+            bounded3(&f("velocity"), p.velocity, MAX_SPEED_M_S, "m/s")?;
+            bounded3(&f("omega"), p.omega, MAX_OMEGA_RAD_S, "rad/s")?;
             match &p.motion {
                 Motion::Rotate { omega } => {
-                    finite3(&f("motion.omega"), *omega)?;
-                    if omega.iter().all(|w| *w == 0.0) {
+                    bounded3(&f("motion.omega"), *omega, MAX_OMEGA_RAD_S, "rad/s")?;
+                    // LIGGGHTS' `fix move rotate` takes the period 2 pi / |omega|: it must
+                    // be a finite number (subnormal components square to zero)
+                    let norm =
+                        (omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]).sqrt();
+                    if norm < MIN_SPIN_RAD_S {
                         return Err(Error::invalid(
                             f("motion.omega"),
-                            "[0, 0, 0]",
-                            "a non-zero angular velocity (use kind = \"fixed\" for none)",
+                            format!("{omega:?}"),
+                            format!(
+                                "an angular velocity of magnitude {MIN_SPIN_RAD_S:e} ..= \
+                                 {MAX_OMEGA_RAD_S:e} rad/s (use kind = \"fixed\" for none)"
+                            ),
                         ));
                     }
                 }
-                Motion::Linear { velocity } => finite3(&f("motion.velocity"), *velocity)?,
+                Motion::Linear { velocity } => {
+                    bounded3(&f("motion.velocity"), *velocity, MAX_SPEED_M_S, "m/s")?
+                }
                 Motion::Free | Motion::Fixed => {}
             }
         }
@@ -450,8 +470,9 @@ impl CaseFile {
             .map(|p| p.radius)
             .fold(f64::INFINITY, f64::min);
         if let Some(w) = &self.wall {
-            finite("wall.z", w.z)?;
+            bounded3("wall.z", [w.z, 0.0, 0.0], MAX_LENGTH_M, "m")?;
             positive("wall.half_size", w.half_size)?;
+            within("wall.half_size", w.half_size, MAX_LENGTH_M, "m")?;
             let p = &self.particles[0];
             let overlap = p.radius - (p.position[2] - w.z);
             if p.position[2] <= w.z || overlap >= p.radius {
@@ -569,22 +590,46 @@ pub fn check_identifier(field: &str, s: &str) -> Result<()> {
     }
 }
 
-fn finite(field: &str, v: f64) -> Result<()> {
-    if v.is_finite() {
+/// Largest friction coefficient (sliding or rolling) a case may set.
+pub const MAX_FRICTION: f64 = 10.0;
+
+/// Largest length of a contact case (positions, radii, wall) [m]: a two-body test lives in
+/// a box LIGGGHTS can print and the deck's derived sizes (a power-of-two box) stay finite.
+pub const MAX_LENGTH_M: f64 = 1e3;
+/// Largest speed of a contact case [m/s].
+pub const MAX_SPEED_M_S: f64 = 1e4;
+/// Largest angular velocity component of a contact case [rad/s].
+pub const MAX_OMEGA_RAD_S: f64 = 1e9;
+/// Smallest imposed spin [rad/s]: its period (2 pi / |omega|) goes into the deck.
+pub const MIN_SPIN_RAD_S: f64 = 1e-9;
+
+/// A finite `v` with `v <= max`.
+fn within(field: &str, v: f64, max: f64, unit: &str) -> Result<()> {
+    if v.is_finite() && v <= max {
         Ok(())
     } else {
-        Err(Error::invalid(field, v, "a finite number"))
+        Err(Error::invalid(field, v, format!("<= {max:e} {unit}")))
     }
 }
-fn finite3(field: &str, v: [f64; 3]) -> Result<()> {
-    if v.iter().all(|x| x.is_finite()) {
+
+/// Three finite components of magnitude at most `max`.
+fn bounded3(field: &str, v: [f64; 3], max: f64, unit: &str) -> Result<()> {
+    if v.iter().all(|x| x.is_finite() && x.abs() <= max) {
         Ok(())
     } else {
         Err(Error::invalid(
             field,
             format!("{v:?}"),
-            "three finite numbers",
+            format!("finite numbers within +-{max:e} {unit}"),
         ))
+    }
+}
+
+fn finite(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, "a finite number"))
     }
 }
 pub(crate) fn positive(field: &str, v: f64) -> Result<()> {

@@ -91,6 +91,9 @@ pub struct ShearSim {
     params: PairParams,
     nve: NveSphere,
     box_: Periodic,
+    /// The fixed y bounds of LIGGGHTS' box [m] (`box_y_lo`, `box_y_hi` of the packing): a
+    /// particle beyond them is lost there, and a blown-up run here.
+    box_y: (f64, f64),
     pub x: Vec<[f64; 3]>,
     pub v: Vec<[f64; 3]>,
     pub omega: Vec<[f64; 3]>,
@@ -220,6 +223,7 @@ impl ShearSim {
                 lx: case.box_x,
                 lz: case.box_z,
             },
+            box_y: (packing.box_y_lo, packing.box_y_hi),
             x: packing.position.clone(),
             v: packing.velocity.clone(),
             omega: packing.omega.clone(),
@@ -308,7 +312,7 @@ impl ShearSim {
     /// servo's reference, a neighbour rebuild, and forces without history update.
     pub fn setup(&mut self, bottom_speed: f64) -> Result<()> {
         self.setup_plates(bottom_speed);
-        self.rebuild();
+        self.rebuild()?;
         self.compute_forces(false)
     }
 
@@ -349,7 +353,7 @@ impl ShearSim {
         self.move_plates();
         self.lap(|p| &mut p.plates);
         if self.decide_rebuild() {
-            self.rebuild();
+            self.rebuild()?;
         } else {
             // FixMesh::pre_force on a step without rebuild: a plate whose nodes moved more
             // than skin/2 since the last build asks for a rebuild at the next step
@@ -625,5 +629,32 @@ mod tests {
             r1.top_force.map(f64::to_bits),
             r3.top_force.map(f64::to_bits)
         );
+    }
+
+    #[test]
+    fn a_blown_up_particle_stops_the_run_at_the_next_rebuild() {
+        let mut c = ShearCase::preset(
+            crate::spec::shear::Preset::Ci,
+            RollingModel::Epsd,
+            0.5,
+            0.0,
+            3,
+        )
+        .unwrap();
+        c.particles = 120;
+        let p = loose_packing(&c);
+        let mut s = ShearSim::new(&c, &p);
+        s.setup(0.0).unwrap();
+        s.v[7] = [0.0, 1e12, 0.0];
+        let mut err = None;
+        for _ in 0..200 {
+            if let Err(e) = s.step() {
+                err = Some(e.to_string());
+                break;
+            }
+        }
+        let e = err.expect("the run must stop");
+        assert!(e.contains("diverged: particle 8"), "{e}");
+        assert!(e.starts_with("native solver stopped at step 1:"), "{e}");
     }
 }

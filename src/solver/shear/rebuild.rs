@@ -4,6 +4,7 @@
 //! plate-triangle candidates built with it.
 
 use super::{image_shift, ShearSim, LIGHT_CHUNK};
+use crate::error::{Error, Result};
 use crate::solver::contact::moved_beyond_half_skin;
 use crate::solver::vec3::V3;
 use rayon::prelude::*;
@@ -40,7 +41,10 @@ impl ShearSim {
     }
 
     /// Wraps positions into the periodic box (LAMMPS `domain->pbc()`) and rebuilds the list.
-    pub(super) fn rebuild(&mut self) {
+    /// First the divergence check ([`ShearSim::check_diverged`]): a blown-up state is an
+    /// error naming the step and the particle, never a neighbour grid over a huge extent.
+    pub(super) fn rebuild(&mut self) -> Result<()> {
+        self.check_diverged()?;
         let (lx, lz) = (self.box_.lx, self.box_.lz);
         for x in &mut self.x {
             if x[0] < 0.0 {
@@ -60,6 +64,40 @@ impl ShearSim {
         self.build_wall_candidates();
         self.xhold.clone_from(&self.x);
         self.size_pair_buffers();
+        Ok(())
+    }
+
+    /// The cheap divergence check of every neighbour rebuild: every particle finite, inside
+    /// LIGGGHTS' fixed y bounds, and no more than one box length outside the periodic x and z
+    /// range (a sane run moves a particle less than skin/2 between checks, far less than
+    /// that). Costs one pass over the particles per rebuild.
+    pub(super) fn check_diverged(&self) -> Result<()> {
+        let (lx, lz) = (self.box_.lx, self.box_.lz);
+        let (ylo, yhi) = self.box_y;
+        let bad = self
+            .x
+            .par_iter()
+            .zip(self.v.par_iter())
+            .position_any(|(x, v)| {
+                !(x.iter().chain(v.iter()).all(|c| c.is_finite())
+                    && (-lx..2.0 * lx).contains(&x[0])
+                    && (ylo..=yhi).contains(&x[1])
+                    && (-lz..2.0 * lz).contains(&x[2]))
+            });
+        match bad {
+            None => Ok(()),
+            Some(i) => Err(Error::Solver {
+                step: self.step,
+                msg: format!(
+                    "the run diverged: particle {} is at {:?} m with velocity {:?} m/s \
+                     (box x 0..{lx:e}, y {ylo:e}..{yhi:e}, z 0..{lz:e}); a time step or a \
+                     rolling stiffness too large for the contacts is the usual cause",
+                    i + 1,
+                    self.x[i],
+                    self.v[i]
+                ),
+            }),
+        }
     }
 
     /// The plates' part of a rebuild: the bottom mesh's elements wrapped into the box
