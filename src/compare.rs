@@ -387,6 +387,7 @@ pub fn block_ci95(v: &[f64]) -> f64 {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Steady {
     /// Mean mu over the steady window, per seed.
+    #[serde(deserialize_with = "crate::fsutil::vec_f64_or_nan")]
     pub per_seed_mu: Vec<f64>,
     /// Mean over seeds and its 95 % CI half-width (over seeds; with one seed, from 10 block
     /// means of the window).
@@ -395,6 +396,7 @@ pub struct Steady {
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mu_ci95: f64,
     /// Mean normal stress on the top plate in the window [Pa], per seed, and over seeds.
+    #[serde(deserialize_with = "crate::fsutil::vec_f64_or_nan")]
     pub per_seed_stress: Vec<f64>,
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub normal_stress: f64,
@@ -417,13 +419,18 @@ pub struct Steady {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct WindowFigures {
     /// mu = Fx / Fy on the top plate.
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mu: f64,
     /// Normal stress on the top plate [Pa].
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub normal_stress: f64,
     /// Rotational and translational kinetic energy [J].
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub erot: f64,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub ke: f64,
     /// Fraction of touching pairs at full rolling mobilisation (native; NaN for LIGGGHTS).
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub mobilised: f64,
 }
 

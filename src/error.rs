@@ -30,8 +30,8 @@ pub enum Error {
     #[error(
         "LIGGGHTS binary `{binary}` not found. Install it with\n  \
          apt-get update && apt-get install -y liggghts libliggghts-dev\n\
-         or pass --liggghts PATH; `verify contact --reference` compares against stored \
-         LIGGGHTS outputs without it"
+         or pass --liggghts PATH. Without LIGGGHTS: `verify contact --reference` compares \
+         against its stored outputs, `verify shear --native-only` runs the native solver alone"
     )]
     LiggghtsMissing { binary: String },
     /// LIGGGHTS ran but failed (non-zero exit, timeout, or missing outputs).

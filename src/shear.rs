@@ -257,8 +257,12 @@ pub fn run_liggghts(
     if rows.last().map(|r| r.step) != Some(case.total_steps()) {
         return Err(Error::LiggghtsFailed {
             reason: format!(
-                "the log ends at step {:?}, expected {}",
-                rows.last().map(|r| r.step),
+                "the log ends {}, expected at step {}",
+                rows.last()
+                    .map_or("before its first thermo line".to_string(), |r| format!(
+                        "at step {}",
+                        r.step
+                    )),
                 case.total_steps()
             ),
             log: dir.join(LOG_NAME),

@@ -62,10 +62,12 @@ fn contact_rolling_plastic_agrees_and_writes_outputs() {
             "native.csv",
             "deck/in.deck",
             "deck/data.txt",
-            "log.liggghts",
+            "liggghts/log.liggghts",
         ] {
             assert!(d.join(f).is_file(), "missing {}", d.join(f).display());
         }
+        // the dumps of a successful run are not kept
+        assert!(!d.join("liggghts/atoms.dump").exists());
     }
 }
 
@@ -260,6 +262,22 @@ fn unknown_case_and_model_list_the_valid_ones() {
         "{}",
         stderr(&o)
     );
+    // LIGGGHTS' models only: the native-only one is neither offered nor accepted silently
+    assert!(!stderr(&o).contains("epsd_implicit"), "{}", stderr(&o));
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--rolling",
+        "epsd_implicit",
+        "--reference",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("exists only in the native solver"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -355,7 +373,9 @@ fn missing_liggghts_says_how_to_install() {
     assert_eq!(o.status.code(), Some(2));
     let e = stderr(&o);
     assert!(
-        e.contains("apt-get install -y liggghts") && e.contains("--reference"),
+        e.contains("apt-get install -y liggghts")
+            && e.contains("--reference")
+            && e.contains("--native-only"),
         "{e}"
     );
 }
@@ -388,6 +408,12 @@ fn failing_liggghts_run_shows_the_log_tail() {
         e.contains("LIGGGHTS run failed") && e.contains("ERROR: Lost atoms"),
         "{e}"
     );
+    // the log the error names is kept, with the failed run's files
+    let log = e
+        .split_whitespace()
+        .find(|w| w.ends_with("log.liggghts"))
+        .expect("the error names the log");
+    assert!(Path::new(log).is_file(), "{log} was not kept: {e}");
 }
 
 #[test]

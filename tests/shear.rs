@@ -162,6 +162,22 @@ fn native_only_resumes_and_writes_snapshots() {
         "{}",
         text(&o)
     );
+    // a cut series is not a result: the seed runs again, and then the summary is whole
+    let csv = out.join("seed1/native.csv");
+    let text_csv = std::fs::read_to_string(&csv).unwrap();
+    let half: Vec<&str> = text_csv
+        .lines()
+        .take(text_csv.lines().count() / 2)
+        .collect();
+    std::fs::write(&csv, half.join("\n") + "\n").unwrap();
+    let o = verify(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        !text(&o).contains("native result found, reused"),
+        "a truncated native.csv was reused: {}",
+        text(&o)
+    );
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), text_csv);
     // the normal stress is held by the servo in the native run
     let s = summary(&out);
     let stress = s.native.as_ref().unwrap().per_seed_stress[0];

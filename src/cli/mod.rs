@@ -223,7 +223,7 @@ fn contact(a: ContactArgs) -> Result<Verdict> {
     }
     let rolling = match a.rolling.as_str() {
         "all" => RollingChoice::All,
-        m => RollingChoice::One(RollingModel::parse(m)?),
+        m => RollingChoice::One(RollingModel::parse_liggghts(m)?),
     };
     let runs = contact_runs(&a.case, a.spec.as_deref(), rolling)?;
     if a.update_reference {

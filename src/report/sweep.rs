@@ -408,5 +408,20 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         }
     }
     println!("report: {}", dir.join("report.html").display());
+    if !missing.is_empty() {
+        // the page is written (it shows what exists), but an incomplete sweep is not a
+        // finished report: say so where scripts look, in the exit status
+        return Err(Error::Cases(format!(
+            "the report is partial: {} of {} runs have no current result (indices {}); run \
+             them (rerun the sweep command, or `verify sweep run-one`) and report again",
+            missing.len(),
+            m.runs.len(),
+            missing
+                .iter()
+                .map(|r| r.index.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        )));
+    }
     Ok(())
 }

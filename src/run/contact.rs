@@ -3,10 +3,10 @@
 
 use super::utc_stamp;
 use crate::compare::{compare, ChannelResult};
-use crate::deck::{contact_deck, run_name, Deck};
+use crate::deck::{contact_deck, run_name, Deck, ATOM_DUMP, CONTACT_DUMP};
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
-use crate::liggghts::{read_contact_frames, Liggghts, LOG_NAME};
+use crate::fsutil::{sha256_hex, write_atomic};
+use crate::liggghts::{read_contact_frames, Liggghts};
 use crate::report::{CaseError, ContactSummary};
 use crate::series::{contact_series, Series};
 use crate::solver::two_body;
@@ -182,26 +182,33 @@ pub fn contact_one(
     )
 }
 
-/// Runs the deck in a temporary directory and returns its channels; keeps the log in `dir`.
+/// Runs the deck in `dir/liggghts/` and returns its channels. After a success the dumps are
+/// deleted (they are large and the CSV holds what they say) and the log is kept; after any
+/// failure (LIGGGHTS', or dumps that do not read) every file stays, so the error's paths
+/// point at files that exist.
 pub fn liggghts_contact_series(
     case: &Case,
     deck: &Deck,
     lig: &Liggghts,
     dir: &Path,
 ) -> Result<Series> {
-    let tmp = tempfile::tempdir().map_err(|e| Error::io(std::env::temp_dir(), e))?;
-    let result = lig.run(deck, tmp.path());
-    if let Ok(log) = std::fs::read(tmp.path().join(LOG_NAME)) {
-        write_atomic(&dir.join(LOG_NAME), &log)?;
-    }
-    result?;
+    let run_dir = dir.join("liggghts");
+    std::fs::create_dir_all(&run_dir).map_err(|e| Error::io(&run_dir, e))?;
+    lig.run(deck, &run_dir)?;
     let n_hist = if case.models.rolling.has_history() {
         6
     } else {
         3
     };
-    let frames = read_contact_frames(tmp.path(), n_hist, case.wall.is_some())?;
-    contact_series(case, &frames)
+    let series = contact_series(
+        case,
+        &read_contact_frames(&run_dir, n_hist, case.wall.is_some())?,
+    )?;
+    for dump in [ATOM_DUMP, CONTACT_DUMP] {
+        let p = run_dir.join(dump);
+        std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+    }
+    Ok(series)
 }
 
 /// Stored references keep every `REFERENCE_STRIDE`-th output step (and the last), to keep
@@ -230,14 +237,6 @@ fn step_range(steps: &[u64]) -> String {
         (Some(a), Some(b)) => format!("{a}..={b}"),
         _ => "none".into(),
     }
-}
-
-fn sha256_hex(bytes: &[u8]) -> String {
-    use sha2::Digest;
-    sha2::Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
 }
 
 /// Reads the stored reference of run `name`, checked against its provenance (row count and

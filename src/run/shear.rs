@@ -87,13 +87,23 @@ pub fn shear_case(c: &CaseRequest, seed: u64, engine: Engine) -> Result<(ShearCa
 }
 
 /// What is kept per seed and code so that an interrupted `verify shear` resumes.
+/// The series' row count and SHA-256 (absent in records stored before they were kept) let a
+/// resumed study refuse a cut or edited series instead of reporting it.
 #[derive(Serialize, Deserialize)]
 struct RunRecord {
     case: String,
     wall_time: f64,
     steps: u64,
+    #[serde(default)]
+    rows: Option<usize>,
+    #[serde(default)]
+    sha256: Option<String>,
 }
 
+/// A finished run stored in `dir` by [`store`], if it is of `case` and complete: the record
+/// names the same case, the series checks against the record, starts at step 0, rises, and
+/// holds the end of every run of the case (a truncated file lacks the last). Anything else
+/// is run again.
 fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
     let rec: RunRecord =
         serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{code}_run.json"))).ok()?)
@@ -101,7 +111,24 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
     if rec.case != serde_json::to_string(case).ok()? {
         return None;
     }
-    let s = Series::read_csv(&dir.join(format!("{code}.csv"))).ok()?;
+    let csv_path = dir.join(format!("{code}.csv"));
+    let bytes = std::fs::read(&csv_path).ok()?;
+    if rec
+        .sha256
+        .as_ref()
+        .is_some_and(|h| *h != crate::fsutil::sha256_hex(&bytes))
+    {
+        return None;
+    }
+    let s = Series::read_csv(&csv_path).ok()?;
+    let ends = case.run_ends();
+    let complete = s.steps.first() == Some(&0)
+        && s.steps.windows(2).all(|w| w[0] < w[1])
+        && ends.iter().all(|e| s.steps.binary_search(e).is_ok())
+        && rec.rows.is_none_or(|n| n == s.rows.len());
+    if !complete {
+        return None;
+    }
     let col = |h: &str| s.col(h);
     // results stored before the mobilised column existed read it as NaN
     let cols: Vec<Option<usize>> = crate::shear::ROW_COLUMNS.iter().map(|h| col(h)).collect();
@@ -137,11 +164,16 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
 }
 
 fn store(dir: &Path, code: &str, case: &ShearCase, run: &CodeRun) -> Result<Series> {
-    let s = crate::shear::write_series(case, run, &dir.join(format!("{code}.csv")))?;
+    let csv_path = dir.join(format!("{code}.csv"));
+    let s = crate::shear::shear_series(case, &run.rows);
+    let bytes = s.csv_bytes(&csv_path)?;
+    write_atomic(&csv_path, &bytes)?;
     let rec = RunRecord {
         case: serde_json::to_string(case)?,
         wall_time: run.wall_time,
         steps: run.steps,
+        rows: Some(s.rows.len()),
+        sha256: Some(crate::fsutil::sha256_hex(&bytes)),
     };
     write_atomic(
         &dir.join(format!("{code}_profile.csv")),

@@ -147,7 +147,10 @@ impl Manifest {
             Error::invalid(
                 "--index",
                 index,
-                format!("0 ..= {} (the manifest's runs)", self.runs.len() - 1),
+                match self.runs.len() {
+                    0 => "none: the manifest lists no runs (plan the sweep again)".to_string(),
+                    n => format!("0 ..= {} (the manifest's runs)", n - 1),
+                },
             )
         })
     }
@@ -214,6 +217,7 @@ pub struct RunResult {
     pub dt: f64,
     /// Explicit rolling dashpot stable at this dt, and the worst criterion S (unstable >= 4).
     pub dashpot_stable: bool,
+    #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub stability_s: f64,
     pub stages: Vec<StageResult>,
     pub liggghts_wall_s: Option<f64>,
@@ -609,5 +613,41 @@ mod tests {
         let more = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 3, "t".into()).unwrap();
         assert!(more.compatible_with(&m) && m.compatible_with(&more));
         assert!(!other.compatible_with(&m));
+    }
+
+    #[test]
+    fn a_result_of_nans_reads_back_so_the_sweep_does_not_rerun_it_forever() {
+        // a blown-up seed's figures are NaN; serde_json writes them as null
+        let m = Manifest::plan(base(), &[0.5], &[0.0], 1, "t".into()).unwrap();
+        let nan_series = Series {
+            columns: vec!["mu[-]".into(), "top_f_y[N]".into()],
+            steps: vec![10],
+            rows: vec![vec![f64::NAN, f64::NAN]],
+        };
+        let st = crate::compare::steady(&[nan_series], (0, 10), 1.0);
+        let res = RunResult {
+            run: m.runs[0].clone(),
+            dt: 1e-7,
+            dashpot_stable: true,
+            stability_s: f64::NAN,
+            stages: vec![StageResult {
+                speed: 0.01,
+                window_steps: (0, 10),
+                liggghts: None,
+                native: Some(st),
+            }],
+            liggghts_wall_s: None,
+            native_wall_s: Some(1.0),
+            date_utc: "now".into(),
+        };
+        let dir = tempfile::tempdir().unwrap();
+        write_atomic(
+            &run_dir(dir.path(), &m.runs[0]).join("result.json"),
+            serde_json::to_string(&res).unwrap().as_bytes(),
+        )
+        .unwrap();
+        let back = current_result(dir.path(), &m.runs[0]).expect("a stored result reads back");
+        let n = back.stages[0].native.as_ref().unwrap();
+        assert!(n.mu.is_nan() && n.per_seed_mu[0].is_nan() && back.stability_s.is_nan());
     }
 }

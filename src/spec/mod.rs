@@ -60,6 +60,15 @@ impl RollingModel {
         RollingModel::EpsdImplicit,
     ];
 
+    /// The models LIGGGHTS 3.8 has (every one but the native-only implicit dashpot).
+    pub const LIGGGHTS: [RollingModel; 5] = [
+        RollingModel::Off,
+        RollingModel::Cdt,
+        RollingModel::Epsd,
+        RollingModel::Epsd2,
+        RollingModel::Epsd3,
+    ];
+
     /// The LIGGGHTS keyword (`off` for no rolling resistance).
     pub fn keyword(self) -> &'static str {
         match self {
@@ -82,6 +91,27 @@ impl RollingModel {
                 name: s.to_string(),
                 valid: Self::ALL.map(|m| m.keyword()).join(", "),
             })
+    }
+
+    /// [`RollingModel::parse`] for a study that runs LIGGGHTS: lists only LIGGGHTS' models,
+    /// and says why a native-only one is refused.
+    pub fn parse_liggghts(s: &str) -> Result<Self> {
+        let m = Self::parse(s).map_err(|_| Error::Unknown {
+            what: "rolling model",
+            name: s.to_string(),
+            valid: Self::LIGGGHTS.map(|m| m.keyword()).join(", "),
+        })?;
+        if m.native_only() {
+            return Err(Error::invalid(
+                "--rolling",
+                m,
+                format!(
+                    "a LIGGGHTS model ({}): `{m}` exists only in the native solver",
+                    Self::LIGGGHTS.map(|m| m.keyword()).join(", ")
+                ),
+            ));
+        }
+        Ok(m)
     }
 
     /// Whether the model stores the rolling torque `r_torque_old` as contact history.
