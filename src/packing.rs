@@ -31,7 +31,7 @@ impl SplitMix64 {
 /// Particles and plate positions of the initial state. y is the plate-normal direction:
 /// the bottom plate's base is at y = 0 (teeth up to `tooth_height`), the top plate's base at
 /// `top_y` (teeth down to `top_y - tooth_height`).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Packing {
     pub radius: Vec<f64>,
     pub position: Vec<[f64; 3]>,

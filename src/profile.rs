@@ -85,7 +85,7 @@ pub fn is_sample(windows: &[SampleWindow], step: u64) -> bool {
 }
 
 /// Heights and shear velocities of every grain at one step, and where the top plate's base was.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProfileSample {
     pub step: u64,
     pub top_y: f64,

@@ -16,7 +16,7 @@ use std::path::Path;
 use std::time::Instant;
 
 /// One output row of either code (SI units; forces are the particles' on the plates).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Row {
     pub step: u64,
     pub top_force: [f64; 3],
@@ -141,33 +141,134 @@ fn is_output(case: &ShearCase, step: u64, ends: &[u64]) -> bool {
     step.is_multiple_of(case.output_every) || ends.contains(&step)
 }
 
+/// When a native run writes its checkpoint ([`run_native`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Checkpointing {
+    /// Never (short runs: lockstep, tests).
+    Off,
+    /// At the first output step after this much wall time since the last checkpoint (or the
+    /// start); `Duration::ZERO` checkpoints at every output step.
+    Every(std::time::Duration),
+}
+
+/// Wall time between checkpoints of long runs: a machine restart or a cluster job's time
+/// limit loses at most this much work.
+pub const CHECKPOINT_EVERY: std::time::Duration = std::time::Duration::from_secs(300);
+
+/// File name of a native run's checkpoint in its output directory.
+pub const CHECKPOINT_NAME: &str = "native_checkpoint.bin";
+
+/// Version of the checkpoint format; a checkpoint of another version is not read.
+const CHECKPOINT_VERSION: u32 = 1;
+
+/// Everything a native run holds part way: the whole solver state (particles, pair and wall
+/// histories, neighbour list and its rebuild state, servo, plates and meshes, step), the rows
+/// and profile samples so far, the compacted state, the stage, and the wall time spent.
+/// Written atomically (MessagePack, every f64 as its 64 bits), so the resumed run is bit-identical to
+/// an uninterrupted one.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct NativeCheckpoint {
+    version: u32,
+    /// The case it belongs to (JSON): a checkpoint of another case is not read.
+    case: String,
+    stage: usize,
+    wall_time: f64,
+    sim: ShearSim,
+    rows: Vec<Row>,
+    compacted: Option<Packing>,
+    profile: Vec<ProfileSample>,
+}
+
+/// The checkpoint in `out` if it belongs to `case` and this format; a note on stderr when one
+/// exists but cannot be used.
+fn load_checkpoint(out: &Path, case: &ShearCase) -> Option<NativeCheckpoint> {
+    let path = out.join(CHECKPOINT_NAME);
+    let bytes = std::fs::read(&path).ok()?;
+    let cp: NativeCheckpoint = match rmp_serde::from_slice(&bytes) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!(
+                "note: {} is not readable ({e}); the run starts over",
+                path.display()
+            );
+            return None;
+        }
+    };
+    if cp.version != CHECKPOINT_VERSION
+        || Some(&cp.case) != serde_json::to_string(case).ok().as_ref()
+    {
+        eprintln!(
+            "note: {} is of another case or format; the run starts over",
+            path.display()
+        );
+        return None;
+    }
+    Some(cp)
+}
+
 /// Runs the native solver. Outputs as LIGGGHTS' thermo: step 0, every `output_every`, and
 /// the last step of each run. Snapshots (VTK) go to `out/vtk/`. On failure the rows so far
 /// are written to `out/native_partial.csv` before the error is returned.
+///
+/// With `checkpointing` on, the run writes `out/native_checkpoint.bin` ([`NativeCheckpoint`])
+/// at output steps and resumes from it when called again with the same case: the finished
+/// run is bit-identical to one never interrupted. The checkpoint is deleted when the run ends.
 pub fn run_native(
     case: &ShearCase,
     packing: &Packing,
     out: &Path,
     progress: &Progress,
+    checkpointing: Checkpointing,
 ) -> Result<CodeRun> {
     let t0 = Instant::now();
-    let mut sim = ShearSim::new(case, packing);
     let ends = case.run_ends();
-    let mut rows = Vec::new();
-    let mut compacted = None;
-    let mut profile = Vec::new();
     let windows = schedule(case);
     let rec = |sim: &ShearSim| Row::from(&sim.record());
+    let resumed = match checkpointing {
+        Checkpointing::Off => None,
+        Checkpointing::Every(_) => load_checkpoint(out, case),
+    };
+    let (mut sim, mut rows, mut compacted, mut profile, first_stage, wall_before) = match resumed {
+        Some(cp) => {
+            progress.resume_at(
+                cp.sim.step,
+                &format!("resumed from checkpoint at step {}", cp.sim.step),
+            );
+            (
+                cp.sim,
+                cp.rows,
+                cp.compacted,
+                cp.profile,
+                cp.stage,
+                cp.wall_time,
+            )
+        }
+        None => (
+            ShearSim::new(case, packing),
+            Vec::new(),
+            None,
+            Vec::new(),
+            0,
+            0.0,
+        ),
+    };
+    let case_json = serde_json::to_string(case)?;
+    let mut last_checkpoint = Instant::now();
     let result = (|| -> Result<()> {
-        sim.setup(0.0)?;
-        rows.push(rec(&sim));
-        for (k, &end) in ends.iter().enumerate() {
-            if k > 0 {
+        if first_stage == 0 && sim.step == 0 {
+            sim.setup(0.0)?;
+            rows.push(rec(&sim));
+        }
+        for (k, &end) in ends.iter().enumerate().skip(first_stage) {
+            // a stage starts with its setup; a run resumed inside the stage is past it
+            if k > 0 && sim.step == ends[k - 1] {
                 sim.setup(case.stages[k - 1].speed)?;
             }
             while sim.step < end {
                 sim.step()?;
-                if is_output(case, sim.step, &ends) {
+                let output = is_output(case, sim.step, &ends);
+                if output {
                     sim.check_finite()?;
                     let lost = sim.lost_particles(packing.box_y_lo, packing.box_y_hi);
                     if lost > 0 {
@@ -193,6 +294,28 @@ pub fn run_native(
                         &sim.snapshot(),
                     )?;
                 }
+                if let Checkpointing::Every(every) = checkpointing {
+                    if output && last_checkpoint.elapsed() >= every && sim.step < end {
+                        // the stage index is k here; a checkpoint at a stage's last step
+                        // would need the next stage's setup, so none is taken there
+                        let cp = NativeCheckpoint {
+                            version: CHECKPOINT_VERSION,
+                            case: case_json.clone(),
+                            stage: k,
+                            wall_time: wall_before + t0.elapsed().as_secs_f64(),
+                            sim: sim.clone(),
+                            rows: rows.clone(),
+                            compacted: compacted.clone(),
+                            profile: profile.clone(),
+                        };
+                        let bytes = rmp_serde::to_vec(&cp).map_err(|e| Error::Solver {
+                            step: sim.step,
+                            msg: format!("cannot encode the checkpoint: {e}"),
+                        })?;
+                        write_atomic(&out.join(CHECKPOINT_NAME), &bytes)?;
+                        last_checkpoint = Instant::now();
+                    }
+                }
             }
             if k == 0 {
                 compacted = Some(sim.state(packing));
@@ -205,13 +328,20 @@ pub fn run_native(
         return Err(e);
     }
     progress.finish();
-    Ok(CodeRun {
+    let run = CodeRun {
         rows,
-        wall_time: t0.elapsed().as_secs_f64(),
+        wall_time: wall_before + t0.elapsed().as_secs_f64(),
         steps: sim.step,
         compacted,
         profiles: profiles(case, &profile)?,
-    })
+    };
+    match std::fs::remove_file(out.join(CHECKPOINT_NAME)) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(Error::io(out.join(CHECKPOINT_NAME), e))
+        }
+        _ => {}
+    }
+    Ok(run)
 }
 
 /// Runs LIGGGHTS on the generated deck in `out/liggghts/` (kept: deck, data, meshes, log),

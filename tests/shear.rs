@@ -245,3 +245,84 @@ fn failing_liggghts_keeps_partial_outputs_and_shows_the_log() {
     assert!(out.join("seed1/liggghts/in.deck").is_file());
     assert!(out.join("seed1/initial_packing.csv").is_file());
 }
+
+#[test]
+fn a_native_run_killed_at_a_random_step_resumes_to_identical_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = |out: &Path, threads: &str| -> Vec<String> {
+        [
+            "shear",
+            "--preset",
+            "ci",
+            "--seeds",
+            "1",
+            "--native-only",
+            "--checkpoint-every",
+            "0",
+            "--threads",
+            threads,
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    // the uninterrupted run
+    let whole = dir.path().join("whole");
+    let o = verify(
+        &args(&whole, "1")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        !whole.join("seed1/native_checkpoint.bin").exists(),
+        "a finished run leaves no checkpoint"
+    );
+    // the same run, SIGKILLed at a random moment after its first checkpoint
+    let cut = dir.path().join("cut");
+    let mut child = std::process::Command::new(common::verify_bin())
+        .args(args(&cut, "1"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let checkpoint = cut.join("seed1/native_checkpoint.bin");
+    let t0 = std::time::Instant::now();
+    while !checkpoint.exists() {
+        assert!(t0.elapsed().as_secs() < 120, "no checkpoint written");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .subsec_nanos();
+    std::thread::sleep(std::time::Duration::from_millis(u64::from(nanos % 1500)));
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    assert!(
+        !cut.join("seed1/native.csv").exists(),
+        "the run ended before it was killed: the test killed nothing"
+    );
+    // rerunning the command resumes (on another thread count) and ends with the same bits
+    let o = verify(
+        &args(&cut, "2")
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(
+        text(&o).contains("resumed from checkpoint at step"),
+        "{}",
+        text(&o)
+    );
+    for f in ["native.csv", "native_profile.json"] {
+        assert_eq!(
+            std::fs::read(whole.join("seed1").join(f)).unwrap(),
+            std::fs::read(cut.join("seed1").join(f)).unwrap(),
+            "{f} differs after the resume"
+        );
+    }
+}

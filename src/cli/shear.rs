@@ -6,6 +6,7 @@ use crate::compare::{MU_ATOL, STRESS_RTOL};
 use crate::error::Result;
 use crate::run::shear::{print_summary, run, ShearRequest};
 use crate::run::{out_or_default, Engine, Verdict, SHEAR_TIMEOUT_S};
+use crate::shear::{Checkpointing, CHECKPOINT_EVERY};
 use crate::spec::shear::{CaseRequest, Overrides, Protocol};
 use clap::Args;
 use std::path::PathBuf;
@@ -56,6 +57,10 @@ pub struct ShearArgs {
     /// Flat plates instead of plates with teeth (flat plates let the gouge slip).
     #[arg(long)]
     pub flat_plates: bool,
+    /// Wall time between checkpoints of each native run [s] (default 300; 0: at every output
+    /// step; -1: none). Rerunning the same command resumes from the checkpoint.
+    #[arg(long, allow_negative_numbers = true, value_parser = checkpoint_seconds)]
+    pub checkpoint_every: Option<f64>,
     /// Tooth height [m] of the plates (default 2e-4).
     #[arg(long)]
     pub tooth_height: Option<f64>,
@@ -155,6 +160,11 @@ impl ShearArgs {
             mu_atol: self.mu_atol,
             stress_rtol: self.stress_rtol,
             liggghts: self.liggghts.request(SHEAR_TIMEOUT_S),
+            checkpoint: match self.checkpoint_every {
+                None => Checkpointing::Every(CHECKPOINT_EVERY),
+                Some(s) if s < 0.0 => Checkpointing::Off,
+                Some(s) => Checkpointing::Every(std::time::Duration::from_secs_f64(s)),
+            },
         }
     }
 }
@@ -165,4 +175,16 @@ pub fn shear(a: ShearArgs) -> Result<Verdict> {
     let summary = run(&req)?;
     print_summary(&summary, &req.out);
     Ok(summary.verdict())
+}
+
+/// `--checkpoint-every`: -1 (none) or 0 ..= 1e6 seconds.
+fn checkpoint_seconds(s: &str) -> std::result::Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if v == -1.0 || (0.0..=1e6).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{v}: valid are -1 (no checkpoints) and 0 ..= 1e6 seconds"
+        ))
+    }
 }

@@ -14,6 +14,8 @@ pub struct Progress {
     bar: Option<ProgressBar>,
     last_decile: AtomicU64,
     start: Instant,
+    /// The step the run (re)started from: the rate and ETA count only steps run since.
+    base: AtomicU64,
 }
 
 impl Progress {
@@ -41,6 +43,7 @@ impl Progress {
             bar,
             last_decile: AtomicU64::new(0),
             start: Instant::now(),
+            base: AtomicU64::new(0),
         }
     }
 
@@ -53,6 +56,26 @@ impl Progress {
             bar: None,
             last_decile: AtomicU64::new(u64::MAX),
             start: Instant::now(),
+            base: AtomicU64::new(0),
+        }
+    }
+
+    /// The run continues from `step` (a checkpoint): says `note`, and counts rate and ETA
+    /// from here.
+    pub fn resume_at(&self, step: u64, note: &str) {
+        self.base.store(step, Ordering::Relaxed);
+        match &self.bar {
+            Some(b) => {
+                b.set_position(step);
+                b.reset_eta();
+                b.println(format!("{:>10}: {note}", self.label));
+            }
+            None if self.total > 0 => {
+                self.last_decile
+                    .store(step * 10 / self.total, Ordering::Relaxed);
+                eprintln!("{:>10}: {note}", self.label);
+            }
+            None => {}
         }
     }
 
@@ -77,7 +100,10 @@ impl Progress {
                         .is_ok()
                 {
                     let el = self.start.elapsed().as_secs_f64();
-                    let eta = el / step.max(1) as f64 * (self.total - step.min(self.total)) as f64;
+                    let done = step
+                        .saturating_sub(self.base.load(Ordering::Relaxed))
+                        .max(1);
+                    let eta = el / done as f64 * (self.total - step.min(self.total)) as f64;
                     eprintln!(
                         "{:>10}: {:>3} %  step {step}/{}  t = {sim:.4e} s  elapsed {el:.0} s  ETA {eta:.0} s",
                         self.label,

@@ -12,7 +12,7 @@ use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
 use crate::report::progress::Progress;
 use crate::series::Series;
-use crate::shear::{run_liggghts, run_native, write_series};
+use crate::shear::{run_liggghts, run_native, write_series, Checkpointing, CHECKPOINT_EVERY};
 use crate::solver::shear::compact;
 use crate::spec::shear::ShearCase;
 use crate::spec::stability_shear::stability;
@@ -159,7 +159,13 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
                                 &Progress::hidden(),
                             )?
                         } else {
-                            run_native(&cc, state, &dir, &Progress::hidden())?
+                            run_native(
+                                &cc,
+                                state,
+                                &dir,
+                                &Progress::hidden(),
+                                Checkpointing::Every(CHECKPOINT_EVERY),
+                            )?
                         };
                         let s = write_series(&cc, &run, &dir.join(format!("{code}.csv")))?;
                         write_atomic(&dir.join(format!("{code}.hash")), hash.as_bytes())?;

@@ -13,7 +13,9 @@ use crate::packing::loose_packing;
 use crate::profile::VelocityProfile;
 use crate::report::progress::Progress;
 use crate::series::Series;
-use crate::shear::{run_liggghts, run_native, write_packing, CodeRun, Row};
+use crate::shear::{
+    run_liggghts, run_native, write_packing, Checkpointing, CodeRun, Row, CHECKPOINT_EVERY,
+};
 use crate::spec::shear::{CaseRequest, Preset, ShearCase, Stage};
 use crate::spec::RollingModel;
 use indicatif::MultiProgress;
@@ -40,6 +42,8 @@ pub struct ShearRequest {
     /// Largest accepted relative deviation of each code's mean normal stress from the target.
     pub stress_rtol: f64,
     pub liggghts: LiggghtsRequest,
+    /// When native runs write their checkpoint (and resume from it).
+    pub checkpoint: Checkpointing,
 }
 
 impl ShearRequest {
@@ -59,6 +63,7 @@ impl ShearRequest {
                 binary: None,
                 timeout_s: SHEAR_TIMEOUT_S,
             },
+            checkpoint: Checkpointing::Every(CHECKPOINT_EVERY),
         }
     }
 
@@ -218,7 +223,7 @@ pub fn shear_lockstep(
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let (l, n) = std::thread::scope(|sc| {
         let h = sc.spawn(|| run_liggghts(&c, compacted, lig, dir, &Progress::hidden()));
-        let n = run_native(&c, compacted, dir, &Progress::hidden());
+        let n = run_native(&c, compacted, dir, &Progress::hidden(), Checkpointing::Off);
         (h.join().expect("LIGGGHTS thread"), n)
     });
     store(dir, "liggghts", &c, &l?)?;
@@ -230,7 +235,7 @@ pub fn shear_lockstep(
         &pdir,
         "native",
         &c,
-        &run_native(&c, &nudged, &pdir, &Progress::hidden())?,
+        &run_native(&c, &nudged, &pdir, &Progress::hidden(), Checkpointing::Off)?,
     )?;
     cached_lockstep(case, dir, steps).ok_or_else(|| Error::Missing {
         what: "lockstep results".into(),
@@ -531,7 +536,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                         } else {
                             Progress::new(&multi, &format!("native s{}", case.seed), total, case.dt)
                         };
-                        pool.install(|| run_native(case, &packing, &dir, &p))
+                        pool.install(|| run_native(case, &packing, &dir, &p, a.checkpoint))
                     }
                 })
             } else {

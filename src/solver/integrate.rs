@@ -9,7 +9,7 @@
 use super::vec3::V3;
 
 /// The nve/sphere constants of one run.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct NveSphere {
     pub dtv: f64,
     pub dtf: f64,

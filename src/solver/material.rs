@@ -3,7 +3,7 @@
 use crate::spec::{Material, Models, RollingModel};
 
 /// The constants one contact needs, for a single material (type 1 with itself).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PairParams {
     /// `Yeff = 1 / ((1 - nu_i^2)/E_i + (1 - nu_j^2)/E_j)` [Pa] (`createYeff`).
     pub y_eff: f64,

@@ -4,7 +4,7 @@
 use super::vec3::{dot, point_distance, sub, V3};
 
 /// One triangle with the derived quantities LIGGGHTS stores per element.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Triangle {
     pub nodes: [V3; 3],
     /// `edgeVec[i] = (node[i+1] - node[i]) / |...|` (`calcEdgeVecLen`, divided via `1/len`).

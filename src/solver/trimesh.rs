@@ -38,7 +38,7 @@ pub struct TriHit {
 }
 
 /// A mesh with its topology flags. Triangle ids are their indices (STL order).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct TriMesh {
     pub tris: Vec<Triangle>,
     pub edge_active: Vec<[bool; 3]>,
@@ -366,7 +366,7 @@ impl TriMesh {
 }
 
 /// One contact record of a particle with a mesh triangle (fix_contact_history_mesh).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TriContactRecord {
     pub mesh: u8,
     pub tri: u32,

@@ -146,7 +146,7 @@ pub fn moved_beyond_half_skin(x: V3, hold: V3, skin: f64) -> bool {
 }
 
 /// Force and torque increments of one partner (LIGGGHTS `ForceData`).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[repr(C)]
 pub struct ForceData {
     pub delta_f: V3,
@@ -156,7 +156,7 @@ pub struct ForceData {
 /// The history slots of one contact, in LIGGGHTS' order: tangential `shearx..z` [m], then
 /// (epsd, epsd2, epsd3) `r_torquex_old..z` [N m].
 /// `repr(C)`: the batched pair pass reads the slots at fixed offsets.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[repr(C)]
 pub struct ContactHistory {
     pub shear: V3,

@@ -41,7 +41,7 @@ use servo::Servo;
 const MAX_WALL_CONTACTS: usize = 8;
 
 /// Mesh contact records of one particle (fix_contact_history_mesh's partner list).
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 struct WallSlots {
     n: u8,
     rec: [TriContactRecord; MAX_WALL_CONTACTS],
@@ -60,7 +60,7 @@ fn image_shift(k: u8, lx: f64, lz: f64) -> V3 {
 }
 
 /// The state of a listed pair after the force loop.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 enum PairContact {
     #[default]
     Apart,
@@ -71,7 +71,7 @@ enum PairContact {
 
 /// Per pair, from the force loop: the implicit dashpot's coefficient and contact normal, and
 /// the contact state.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 struct PairAux {
     damping: f64,
     en: V3,
@@ -85,7 +85,11 @@ struct PairAux {
 /// use reads `nve.dtv`: the drift, the rotation, the bottom plate, the servo (which keeps
 /// none), and the contact kernels through `params.dt`, set from it (LIGGGHTS' models read
 /// `update->dt`).
-#[derive(Clone)]
+///
+/// Serialisable whole (every field but the phase clock and the kernel choice, which the
+/// reading machine makes again): a checkpoint is this struct, so a resumed run continues from
+/// exactly the state, scratch buffers included, that the uninterrupted run would have.
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
 pub struct ShearSim {
     case: ShearCase,
     params: PairParams,
@@ -145,8 +149,10 @@ pub struct ShearSim {
     top_force: [f64; 3],
     bottom_force: [f64; 3],
     /// The pair pass's kernel path (the fastest this CPU runs, unless set).
+    #[serde(skip, default = "KernelPath::detect")]
     kernel: KernelPath,
     /// Wall time per phase of `step` (off unless [`ShearSim::time_phases`]).
+    #[serde(skip)]
     phases: Option<PhaseClock>,
 }
 

@@ -20,7 +20,7 @@ use crate::solver::contact::ContactHistory;
 /// native pair that copy, operation for operation, so its history is the one LIGGGHTS dumps.
 /// `repr(C)`, 80 bytes: the batched pair pass gathers `shift` and `hist` at fixed offsets
 /// (checked below).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[repr(C)]
 pub struct Pair {
     pub i: u32,
@@ -40,7 +40,7 @@ const _: () = {
 };
 
 /// The list and the per-particle index of its pairs (CSR), for a deterministic reduction.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NeighborList {
     pub pairs: Vec<Pair>,
     /// `start[p]..start[p+1]` indexes `entries` for particle p.
@@ -51,7 +51,7 @@ pub struct NeighborList {
 }
 
 /// Box geometry the list needs.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Periodic {
     pub lx: f64,
     pub lz: f64,

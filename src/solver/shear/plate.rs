@@ -16,14 +16,14 @@
 use crate::spec::shear::Plates;
 
 /// Which plate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Side {
     Bottom,
     Top,
 }
 
 /// Geometry of one plate at the current time.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Plate {
     pub side: Side,
     /// y of the plate's base (valleys of the teeth).

@@ -12,7 +12,7 @@
 
 use crate::spec::shear::Servo as ServoSpec;
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Servo {
     pub axis: [f64; 3],
     pub sp: f64,
