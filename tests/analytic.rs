@@ -322,3 +322,30 @@ fn pos(s: &Series, row: usize, k: usize) -> [f64; 3] {
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
+
+/// Sphere on the mesh wall, held at a fixed overlap while it spins: the normal force is
+/// Hertz's static one, Fn = 4/3 Y* sqrt(R delta) delta with Y* = E / (2 (1 - nu^2)) (the wall
+/// has the sphere's material) and R* = R (a plane), in both codes at every step.
+#[test]
+fn wall_normal_force_is_hertz_for_a_sphere_on_a_plane() {
+    for case in contact_runs("wall_rolling_plastic", None, RollingChoice::All).unwrap() {
+        let m = &case.material;
+        let p = &case.particles[0];
+        let w = case.wall.as_ref().unwrap();
+        let delta = p.radius - (p.position[2] - w.z);
+        let y_star = m.youngs_modulus / (2.0 * (1.0 - m.poisson_ratio * m.poisson_ratio));
+        let hertz = 4.0 / 3.0 * y_star * (p.radius * delta).sqrt() * delta;
+        for (code, s) in both(&case) {
+            let fn_ = s.column("fn[N]").unwrap();
+            assert!(fn_.len() > 100, "{code}: {} rows", fn_.len());
+            for (k, f) in fn_.iter().enumerate() {
+                assert!(
+                    (f / hertz - 1.0).abs() < 1e-12,
+                    "{code}/{}: step {}: Fn {f:e} vs Hertz {hertz:e}",
+                    case.models.rolling,
+                    s.steps[k]
+                );
+            }
+        }
+    }
+}

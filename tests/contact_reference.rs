@@ -6,6 +6,7 @@ use dem_verify::deck::run_name;
 use dem_verify::run::contact::{contact_runs, write_decks, RollingChoice};
 use dem_verify::series::{contact_series, Series};
 use dem_verify::solver::two_body;
+use dem_verify::spec::{builtin_case, CaseFile, RollingModel};
 use std::path::Path;
 
 fn root() -> &'static Path {
@@ -85,4 +86,50 @@ fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
     }
     out.sort();
     out
+}
+
+/// Negative controls: the stored-reference comparison has the power to see a wrong model.
+/// A 10 % wrong sliding friction (tangential_slip) and a 10 % wrong rolling stiffness
+/// (rolling_elastic, epsd3's `rollingStiffness`) must each fail it, in the channel they move.
+#[test]
+fn a_wrong_friction_or_rolling_stiffness_fails_the_contact_comparison() {
+    type Wrong = fn(&mut CaseFile);
+    let controls: [(&str, RollingModel, Wrong, &str); 2] = [
+        (
+            "tangential_slip",
+            RollingModel::Off,
+            |c| c.material.friction *= 1.1,
+            "ft",
+        ),
+        (
+            "rolling_elastic",
+            RollingModel::Epsd3,
+            |c| c.material.rolling_stiffness *= 1.1,
+            "m_roll",
+        ),
+    ];
+    for (name, model, wrong, channel) in controls {
+        let right = builtin_case(name).unwrap().with_rolling(model);
+        let stored = Series::read_csv(
+            &root()
+                .join("reference/contact")
+                .join(run_name(&right.clone().validate().unwrap()))
+                .join("liggghts.csv"),
+        )
+        .unwrap();
+        let mut file = right.clone();
+        wrong(&mut file);
+        let case = file.validate().unwrap();
+        let native = contact_series(&case, &two_body::run(&case).unwrap())
+            .unwrap()
+            .at_steps(&stored.steps)
+            .unwrap();
+        let results = compare(name, model.keyword(), &stored, &native, CONTACT_RTOL).unwrap();
+        let r = results.iter().find(|r| r.channel == channel).unwrap();
+        assert!(
+            !r.pass && r.max_rel_err > 1e-3,
+            "{name}/{model}: a 10 % wrong model passed in {channel} (rel err {:e})",
+            r.max_rel_err
+        );
+    }
 }

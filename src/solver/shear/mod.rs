@@ -559,82 +559,67 @@ mod tests {
     use crate::packing::loose_packing;
     use crate::spec::RollingModel;
 
-    fn run_steps(threads: usize, steps: u64) -> (Vec<[f64; 3]>, PlateRecord) {
-        let mut c = ShearCase::preset(
-            crate::spec::shear::Preset::Ci,
-            RollingModel::Epsd,
-            0.5,
-            0.5,
-            3,
-        )
-        .unwrap();
-        c.particles = 120;
-        let p = loose_packing(&c);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
-            let mut s = ShearSim::new(&c, &p);
-            s.setup(0.0).unwrap();
-            for _ in 0..steps / 2 {
-                s.step().unwrap();
-            }
-            s.setup(0.01).unwrap();
-            for _ in 0..steps / 2 {
-                s.step().unwrap();
-            }
-            (s.x.clone(), s.record())
-        })
+    /// Every piece of state a step carries to the next (particles, forces, rotations, pair
+    /// list with histories, wall contact slots, plates, servo, rebuild state) as bytes,
+    /// f64 as their bits.
+    fn state_bytes(s: &ShearSim) -> Vec<u8> {
+        rmp_serde::to_vec(&(
+            (&s.x, &s.v, &s.omega, &s.f, &s.torque, &s.rotation),
+            (&s.nl.pairs, &s.wall, &s.wall_cand),
+            (&s.servo, &s.top, &s.bottom, s.top_force, s.bottom_force),
+            (s.step, s.ago, s.mesh_rebuild_pending, &s.xhold),
+        ))
+        .unwrap()
     }
 
+    /// 2500 particles (the paper's count: every per-particle loop is split into several
+    /// chunks, the pair pass into many), from a dense state, sheared on 1, 2 and 3 threads:
+    /// every bit of the state equal, for the explicit and the implicit rolling dashpot.
     #[test]
-    fn implicit_dashpot_is_bit_identical_for_any_thread_count() {
-        let mut c = ShearCase::preset(
-            crate::spec::shear::Preset::Ci,
-            RollingModel::EpsdImplicit,
-            1.0,
-            0.5,
-            3,
-        )
-        .unwrap();
-        c.particles = 120;
-        let p = loose_packing(&c);
-        let run = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let mut s = ShearSim::new(&c, &p);
-                    s.setup(0.0).unwrap();
-                    for _ in 0..3000 {
-                        s.step().unwrap();
-                    }
-                    s.omega.clone()
-                })
+    fn bit_identical_for_any_thread_count_at_paper_size() {
+        let preset = |model| {
+            ShearCase::preset(crate::spec::shear::Preset::Fast, model, 0.5, 0.5, 4).unwrap()
         };
-        let (a, b) = (run(1), run(3));
-        assert!(a.iter().any(|w| w[0] != 0.0));
-        for (x, y) in a.iter().zip(&b) {
-            assert_eq!(x.map(f64::to_bits), y.map(f64::to_bits));
-        }
-    }
-
-    #[test]
-    fn bit_identical_for_any_thread_count() {
-        let (x1, r1) = run_steps(1, 3000);
-        let (x3, r3) = run_steps(3, 3000);
-        assert!(r1.top_force[1] != 0.0, "plate must be loaded in this test");
-        for (a, b) in x1.iter().zip(&x3) {
-            for k in 0..3 {
-                assert_eq!(a[k].to_bits(), b[k].to_bits());
+        // one dense packing (the preset's whole compression) for both models
+        let c = preset(RollingModel::Epsd);
+        assert_eq!(c.particles, 2500);
+        let dense = compact(&c, &loose_packing(&c), c.compression_steps).unwrap();
+        for model in [RollingModel::Epsd, RollingModel::EpsdImplicit] {
+            let c = preset(model);
+            let run = |threads: usize| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| {
+                        let mut s = ShearSim::new(&c, &dense);
+                        s.setup(c.stages[0].speed).unwrap();
+                        for _ in 0..1500 {
+                            s.step().unwrap();
+                        }
+                        s
+                    })
+            };
+            let one = run(1);
+            let count = |f: fn(&PairAux) -> bool| one.pair_damp.iter().filter(|a| f(a)).count();
+            let touching = count(|a| a.contact != PairContact::Apart);
+            let sliding = count(|a| a.sliding);
+            let rolling_limit = count(|a| a.contact == PairContact::RollingMobilised);
+            assert!(
+                touching > 2500 && sliding > 50 && rolling_limit > 50,
+                "{model}: a dense sheared state ({touching} touching, {sliding} sliding, \
+                 {rolling_limit} at the rolling limit)"
+            );
+            assert!(one.wall.iter().any(|w| w.n > 0), "{model}: plate contacts");
+            assert!(one.omega.iter().any(|w| w[2] != 0.0));
+            let reference = state_bytes(&one);
+            for threads in [2, 3] {
+                assert!(
+                    state_bytes(&run(threads)) == reference,
+                    "{model}: {threads} threads differ from 1"
+                );
             }
         }
-        assert_eq!(
-            r1.top_force.map(f64::to_bits),
-            r3.top_force.map(f64::to_bits)
-        );
     }
 
     #[test]
