@@ -3,6 +3,7 @@
 //! (or the option) it refuses, never a panic; every accepted input must render its LIGGGHTS
 //! deck and run natively (a few steps of a shear case; a whole short contact case).
 
+use clap::Parser;
 use dem_verify::cli::{Cli, Command};
 use dem_verify::deck::contact_deck;
 use dem_verify::deck::shear::shear_deck;
@@ -11,7 +12,6 @@ use dem_verify::packing::loose_packing;
 use dem_verify::solver::shear::ShearSim;
 use dem_verify::solver::two_body;
 use dem_verify::spec::{builtin_case, builtin_names, CaseFile};
-use clap::Parser;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use std::path::Path;
@@ -188,7 +188,10 @@ fn generated_case_files_are_refused_by_field_or_run() {
     refused += c.1;
     eprintln!("case files: {accepted} accepted and run, {refused} refused by field");
     // both sides are exercised: not a test of only refusals or only acceptances
-    assert!(accepted > 100 && refused > 2000, "{accepted} accepted, {refused} refused");
+    assert!(
+        accepted > 100 && refused > 2000,
+        "{accepted} accepted, {refused} refused"
+    );
 }
 
 /// Values for `verify shear` options: valid, edge and garbage.
@@ -234,7 +237,10 @@ fn generated_shear_arguments_are_refused_by_option_or_start() {
     });
     let counts = std::cell::RefCell::new((0u32, 0u32, 0u32));
     let strategy = proptest::collection::vec(
-        (proptest::sample::select(SHEAR_OPTIONS.to_vec()), option_value()),
+        (
+            proptest::sample::select(SHEAR_OPTIONS.to_vec()),
+            option_value(),
+        ),
         1..4,
     );
     runner
@@ -275,9 +281,9 @@ fn generated_shear_arguments_are_refused_by_option_or_start() {
                     let packing = loose_packing(&case);
                     prop_assert!(shear_deck(&case, &packing).get("in.deck").is_some());
                     let mut sim = ShearSim::new(&case, &packing);
-                    let ran = sim.setup(0.0).and_then(|_| {
-                        (0..3).try_for_each(|_| sim.step())
-                    });
+                    let ran = sim
+                        .setup(0.0)
+                        .and_then(|_| (0..3).try_for_each(|_| sim.step()));
                     match ran {
                         Ok(()) | Err(Error::Solver { .. }) => {}
                         Err(e) => prop_assert!(false, "{args:?}: accepted, then {e}"),

@@ -22,6 +22,8 @@
 pub mod batch;
 pub mod lanes;
 pub mod normal;
+#[cfg(test)]
+mod properties;
 pub mod rolling;
 pub mod surface;
 pub mod tangential;
