@@ -245,7 +245,7 @@ pub fn shear_lockstep(
 
 /// The case of the lockstep from the compacted state: one servo step, then `steps` steps at the
 /// first stage's speed, output every 10 steps.
-fn lockstep_case(case: &ShearCase, steps: u64) -> ShearCase {
+pub fn lockstep_case(case: &ShearCase, steps: u64) -> ShearCase {
     let mut c = case.clone();
     c.compression_steps = 1;
     let speed = case.stages[0].speed;
