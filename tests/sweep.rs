@@ -66,17 +66,30 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
             "{id} {code}: {stress} Pa"
         );
     }
-    // the codes agree on the sweep's mean friction
-    let mean = |c: &str| {
-        let v: Vec<f64> = res.iter().filter(|r| r.1 == c).map(|r| r.2).collect();
-        v.iter().sum::<f64>() / v.len() as f64
+    // per point (mean over its 2 seeds), not over the whole sweep where errors could cancel:
+    // the codes agree within 0.1 (two chaotic realisations of 2 seeds each of the ci preset;
+    // its seed spread is about 0.03), and each code shows the paper's claim 1 (with
+    // eta_r = 0, rolling resistance raises the friction: mu(1, 0) above mu(0, 0) by > 0.05)
+    let point = |code: &str, mu_r: &str, eta_r: &str| {
+        let v: Vec<f64> = res
+            .iter()
+            .filter(|r| r.1 == code && r.0.starts_with(&format!("mur{mu_r}_etar{eta_r}_")))
+            .map(|r| r.2)
+            .collect();
+        assert_eq!(v.len(), 2, "{code} ({mu_r}, {eta_r}): {v:?}");
+        v.iter().sum::<f64>() / 2.0
     };
-    assert!(
-        (mean("liggghts") - mean("native")).abs() < 0.05,
-        "{} vs {}",
-        mean("liggghts"),
-        mean("native")
-    );
+    for (mu_r, eta_r) in [("0", "0"), ("0", "0.5"), ("1", "0"), ("1", "0.5")] {
+        let (l, n) = (point("liggghts", mu_r, eta_r), point("native", mu_r, eta_r));
+        assert!(
+            (l - n).abs() < 0.1,
+            "({mu_r}, {eta_r}): LIGGGHTS {l} vs native {n}"
+        );
+    }
+    for code in ["liggghts", "native"] {
+        let (lo, hi) = (point(code, "0", "0"), point(code, "1", "0"));
+        assert!(hi > lo + 0.05, "{code}: mu(1, 0) = {hi} vs mu(0, 0) = {lo}");
+    }
     let report = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(report.contains("conclusions, checked"));
     for f in [
