@@ -473,3 +473,51 @@ fn list_into_a_closed_pipe_ends_quietly() {
     assert!(!stderr(&o).contains("panicked"), "{}", stderr(&o));
     assert_eq!(o.status.signal(), Some(13), "{:?}", o.status);
 }
+
+#[test]
+fn an_installed_binary_works_from_any_directory() {
+    // a copy of the binary elsewhere (as `cargo install --path .` puts it), run from another
+    // directory: it finds the stored references without --reference-dir
+    let dir = tempfile::tempdir().unwrap();
+    let bin = dir.path().join("bin/verify");
+    std::fs::create_dir_all(bin.parent().unwrap()).unwrap();
+    std::fs::copy(common::verify_bin(), &bin).unwrap();
+    let run = |env: Option<&str>| {
+        let mut c = std::process::Command::new(&bin);
+        c.args([
+            "contact",
+            "--case",
+            "rolling_unload",
+            "--reference",
+            "--out",
+            "out",
+        ])
+        .current_dir(dir.path())
+        .env_remove("DEM_VERIFY_REFERENCE");
+        if let Some(v) = env {
+            c.env("DEM_VERIFY_REFERENCE", v);
+        }
+        c.output().unwrap()
+    };
+    let o = run(None);
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let o = run(Some("/nonexistent/reference"));
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+    assert!(
+        stderr(&o).contains("/nonexistent/reference"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn completions_and_man_page_are_printed() {
+    let o = verify(&["completions", "bash"]);
+    assert_eq!(o.status.code(), Some(0));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains("_verify()") && s.contains("--mu-r"), "{s}");
+    let o = verify(&["man"]);
+    assert_eq!(o.status.code(), Some(0));
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(s.contains(".TH verify 1") && s.contains("contact"), "{s}");
+}

@@ -156,6 +156,13 @@ pub enum Command {
         #[arg(long, default_value = "liggghts_inputs")]
         out: PathBuf,
     },
+    /// Print a shell completion script, e.g. `verify completions bash > ~/.local/share/bash-completion/completions/verify`.
+    Completions {
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff), e.g. `verify man > verify.1 && man ./verify.1`.
+    Man,
 }
 
 #[derive(Args, Debug)]
@@ -181,9 +188,10 @@ pub struct ContactArgs {
     /// Run LIGGGHTS and store its outputs as the new reference (with provenance).
     #[arg(long, conflicts_with = "reference")]
     pub update_reference: bool,
-    /// Directory of stored reference outputs.
-    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/reference"))]
-    pub reference_dir: PathBuf,
+    /// Directory of stored reference outputs (default: $DEM_VERIFY_REFERENCE, else the
+    /// repository's reference/ this binary was built from).
+    #[arg(long)]
+    pub reference_dir: Option<PathBuf>,
     /// List the built-in cases and exit.
     #[arg(long)]
     pub list: bool,
@@ -206,6 +214,23 @@ pub fn run(cli: Cli) -> Result<Verdict> {
             println!("wrote {n} decks under {}", out.display());
             Ok(Verdict::Agree)
         }
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            clap_complete::generate(shell, &mut Cli::command(), "verify", &mut std::io::stdout());
+            Ok(Verdict::Agree)
+        }
+        Command::Man => {
+            use clap::CommandFactory;
+            let mut out = Vec::new();
+            clap_mangen::Man::new(Cli::command())
+                .render(&mut out)
+                .map_err(|e| Error::io("stdout", e))?;
+            use std::io::Write;
+            std::io::stdout()
+                .write_all(&out)
+                .map_err(|e| Error::io("stdout", e))?;
+            Ok(Verdict::Agree)
+        }
     }
 }
 
@@ -226,6 +251,10 @@ fn contact(a: ContactArgs) -> Result<Verdict> {
         m => RollingChoice::One(RollingModel::parse_liggghts(m)?),
     };
     let runs = contact_runs(&a.case, a.spec.as_deref(), rolling)?;
+    let reference_dir = match &a.reference_dir {
+        Some(d) => d.clone(),
+        None => crate::run::default_reference_dir()?,
+    };
     if a.update_reference {
         for c in &runs {
             check_reference_target(&c.name, a.spec.is_some())?;
@@ -238,12 +267,12 @@ fn contact(a: ContactArgs) -> Result<Verdict> {
     };
     let req = ContactRequest {
         rtol: a.rtol,
-        reference_dir: a.reference_dir.clone(),
+        reference_dir: reference_dir.clone(),
         update_reference: a.update_reference,
     };
     let version = match &lig {
         Some(l) => l.version(),
-        None => read_reference_version(&a.reference_dir),
+        None => read_reference_version(&reference_dir),
     };
     let out = out_or_default(a.out.as_deref(), "contact");
     println!(

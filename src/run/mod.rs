@@ -129,6 +129,28 @@ impl LiggghtsRequest {
     }
 }
 
+/// Where stored reference outputs are read and written when no `--reference-dir` is given:
+/// `$DEM_VERIFY_REFERENCE`, else the `reference/` of the repository this binary was built
+/// from (so `cargo install --path .` works from any directory while the clone exists), else
+/// an error that says how to point at one.
+pub fn default_reference_dir() -> Result<PathBuf> {
+    if let Some(d) = std::env::var_os("DEM_VERIFY_REFERENCE") {
+        return Ok(PathBuf::from(d));
+    }
+    let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/reference"));
+    if built.is_dir() {
+        return Ok(built);
+    }
+    Err(Error::Missing {
+        what: format!(
+            "the stored reference outputs (this binary was built from {}, which is gone; pass \
+             --reference-dir DIR or set DEM_VERIFY_REFERENCE to a clone's reference/)",
+            env!("CARGO_MANIFEST_DIR")
+        ),
+        dir: built,
+    })
+}
+
 /// The default output directory of a study: `runs/<prefix>-<UTC stamp>`.
 pub fn default_out(prefix: &str) -> PathBuf {
     PathBuf::from("runs").join(format!("{prefix}-{}", utc_stamp()))

@@ -161,7 +161,7 @@ fn contact_night(a: &NightlyRequest) -> Result<Vec<ContactRow>> {
     let out = a.out.join("contact");
     let req = ContactRequest {
         rtol: CONTACT_RTOL,
-        reference_dir: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/reference")),
+        reference_dir: super::default_reference_dir()?,
         update_reference: false,
     };
     let lig = LiggghtsRequest {
