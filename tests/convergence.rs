@@ -223,7 +223,7 @@ fn native_only_models_never_reach_liggghts() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
-        String::from_utf8_lossy(&o.stderr).contains("contact cases compare with LIGGGHTS"),
+        String::from_utf8_lossy(&o.stderr).contains("exists only in the native solver"),
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
