@@ -17,6 +17,32 @@ fn write_case(dir: &Path, edit: impl Fn(String) -> String) -> String {
     p.display().to_string()
 }
 
+/// An executable script standing in for LIGGGHTS, in `dir`.
+fn fake_liggghts(dir: &Path, script: &str) -> std::path::PathBuf {
+    use std::os::unix::fs::PermissionsExt;
+    let fake = dir.join("liggghts");
+    std::fs::write(&fake, script).unwrap();
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    fake
+}
+
+/// `verify contact --case rolling_plastic --rolling epsd` with `fake` as LIGGGHTS.
+fn contact_with_fake(fake: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "contact",
+        "--case",
+        "rolling_plastic",
+        "--rolling",
+        "epsd",
+        "--liggghts",
+        fake.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    verify(&args)
+}
+
 #[test]
 fn contact_rolling_plastic_agrees_and_writes_outputs() {
     common::liggghts();
@@ -383,25 +409,11 @@ fn missing_liggghts_says_how_to_install() {
 #[test]
 fn failing_liggghts_run_shows_the_log_tail() {
     let dir = tempfile::tempdir().unwrap();
-    let fake = dir.path().join("liggghts");
-    std::fs::write(
-        &fake,
+    let fake = fake_liggghts(
+        dir.path(),
         "#!/bin/sh\necho 'LIGGGHTS (fake)' > log.liggghts\necho 'ERROR: Lost atoms: original 2 current 1' >> log.liggghts\nexit 1\n",
-    )
-    .unwrap();
-    use std::os::unix::fs::PermissionsExt;
-    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let o = verify(&[
-        "contact",
-        "--case",
-        "rolling_plastic",
-        "--rolling",
-        "epsd",
-        "--liggghts",
-        fake.to_str().unwrap(),
-        "--out",
-        dir.path().join("out").to_str().unwrap(),
-    ]);
+    );
+    let o = contact_with_fake(&fake, &dir.path().join("out"), &[]);
     assert_eq!(o.status.code(), Some(2));
     let e = stderr(&o);
     assert!(
@@ -421,28 +433,14 @@ fn timeout_kills_what_a_wrapper_started() {
     // a wrapper script whose "LIGGGHTS" (a sleep) is its child, not itself: the timeout
     // must end both
     let dir = tempfile::tempdir().unwrap();
-    let fake = dir.path().join("liggghts");
     let marker = format!("{}", 86_400 + std::process::id() % 10_000);
-    std::fs::write(
-        &fake,
-        format!("#!/bin/sh\necho 'LIGGGHTS (wrapper)' > log.liggghts\nsleep {marker}\necho done\n"),
-    )
-    .unwrap();
-    use std::os::unix::fs::PermissionsExt;
-    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
-    let o = verify(&[
-        "contact",
-        "--case",
-        "rolling_plastic",
-        "--rolling",
-        "epsd",
-        "--liggghts",
-        fake.to_str().unwrap(),
-        "--timeout",
-        "1",
-        "--out",
-        dir.path().join("out").to_str().unwrap(),
-    ]);
+    let fake = fake_liggghts(
+        dir.path(),
+        &format!(
+            "#!/bin/sh\necho 'LIGGGHTS (wrapper)' > log.liggghts\nsleep {marker}\necho done\n"
+        ),
+    );
+    let o = contact_with_fake(&fake, &dir.path().join("out"), &["--timeout", "1"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("timed out"), "{}", stderr(&o));
     let ps = std::process::Command::new("ps")

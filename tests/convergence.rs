@@ -213,18 +213,5 @@ fn native_only_models_never_reach_liggghts() {
     let o = verify(&["shear", "--rolling", "epsd_implicit", "--preset", "ci"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("exists only in the native solver"));
-    let o = verify(&[
-        "contact",
-        "--case",
-        "rolling_plastic",
-        "--rolling",
-        "epsd_implicit",
-        "--reference",
-    ]);
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("exists only in the native solver"),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    // contact: tests/cli.rs `unknown_case_and_model_list_the_valid_ones`
 }

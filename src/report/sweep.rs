@@ -416,11 +416,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
              them (rerun the sweep command, or `verify sweep run-one`) and report again",
             missing.len(),
             m.runs.len(),
-            missing
-                .iter()
-                .map(|r| r.index.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
+            crate::run::sweep::indices(&missing)
         )));
     }
     Ok(())

@@ -316,6 +316,14 @@ pub fn collect(m: &Manifest, sweep: &Path) -> (Vec<RunResult>, Vec<RunSpec>) {
     (done, missing)
 }
 
+/// The runs' manifest indices, comma-separated (for messages).
+pub fn indices(runs: &[RunSpec]) -> String {
+    runs.iter()
+        .map(|r| r.index.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
 /// `results.csv`: one row per run, stage and code.
 pub fn results_csv(results: &[RunResult]) -> String {
     let mut s = String::from(
@@ -363,11 +371,7 @@ pub fn collect_dir(dir: &Path) -> Result<(Vec<RunResult>, usize)> {
              (it resumes)",
             missing.len(),
             m.runs.len(),
-            missing
-                .iter()
-                .map(|r| r.index.to_string())
-                .collect::<Vec<_>>()
-                .join(","),
+            indices(&missing),
             dir.join("manifest.json").display()
         )));
     }
