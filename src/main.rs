@@ -15,9 +15,18 @@ fn main() -> ExitCode {
     }
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
+    // every comparing command ends with one verdict line (stdout), errors with one `error:`
+    // line (stderr)
     match run(Cli::parse()) {
-        Ok(Verdict::Agree) => ExitCode::SUCCESS,
-        Ok(Verdict::Disagree) => ExitCode::from(1),
+        Ok(Verdict::Agree) => {
+            println!("verdict: agree");
+            ExitCode::SUCCESS
+        }
+        Ok(Verdict::Disagree) => {
+            println!("verdict: DISAGREE");
+            ExitCode::from(1)
+        }
+        Ok(Verdict::Done) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(2)

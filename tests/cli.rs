@@ -112,6 +112,9 @@ fn reference_mode_needs_no_liggghts() {
         out.to_str().unwrap(),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // one verdict line ends every comparing command
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(stdout.lines().last(), Some("verdict: agree"), "{stdout}");
 }
 
 /// Copies the stored reference of `rolling_elastic__epsd` into `refdir`, its CSV lines edited

@@ -135,21 +135,46 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Two-particle (and particle-wall) contact histories: native vs LIGGGHTS, channel by channel.
+    #[command(after_help = "Examples:\n  \
+        verify contact --case rolling_plastic            # one case, every model it lists, live LIGGGHTS\n  \
+        verify contact --reference                       # every case against the stored LIGGGHTS outputs\n  \
+        verify contact --spec my_case.toml --rolling epsd2\n\n\
+        Exit status: 0 agree, 1 disagree, 2 error.")]
     Contact(ContactArgs),
     /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
+    #[command(after_help = "Examples:\n  \
+        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci   # both codes, 3 seeds, minutes\n  \
+        verify shear --mu-r 0.5 --preset fast --native-only --seeds 6\n  \
+        verify shear --preset paper --mu-r 1 --eta-r 0.5 --native-only   # hours; rerun to resume\n\n\
+        Exit status: 0 agree, 1 disagree, 2 error.")]
     Shear(shear::ShearArgs),
     /// Time-step convergence: the same case from the same compacted state at smaller dt.
+    #[command(after_help = "Examples:\n  \
+        verify convergence --mu-r 1 --eta-r 0.5 --preset ci --dt-factors 1,0.5,0.25\n  \
+        verify convergence --mu-r 1 --eta-r 0.5 --engine both --liggghts-dt-factors 1,0.5 --with-implicit\n\n\
+        Exit status: 0 converged, 1 not converged, 2 error.")]
     Convergence(convergence::ConvergenceArgs),
     /// Every contact case and the nightly shear cases in both codes: report.html, summary.json,
     /// history.
+    #[command(after_help = "Examples:\n  \
+        verify nightly --quick --out runs/nightly/quick   # minutes: ci preset, one seed\n  \
+        tools/nightly.sh                                  # the full night into runs/nightly/<date>\n\n\
+        Exit status: 0 agree, 1 disagree, 2 error.")]
     Nightly(nightly::NightlyArgs),
     /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,
     /// report with the paper's figures and conclusions.
+    #[command(after_help = "Examples:\n  \
+        verify sweep --preset ci --mu-r 0,1 --eta-r 0,0.5 --seeds 2 --jobs 2 --out runs/sweep-ci\n  \
+        verify sweep --emit slurm --out /scratch/sweep && sbatch /scratch/sweep/sweep.sbatch\n  \
+        verify sweep report runs/sweep-ci --converged runs/conv-1-0.5")]
     Sweep(sweep::SweepArgs),
     /// The sheared gouge contact by contact: native restarted from LIGGGHTS' recorded states
     /// (histories included) and compared with LIGGGHTS' next steps.
     Replay(replay::ReplayArgs),
     /// Throughput of both codes on the same dense shear state (particle-steps per second).
+    #[command(after_help = "Examples:\n  \
+        verify bench --preset fast --steps 10000 --threads 1,2 --kernels scalar,avx512\n  \
+        verify bench --preset fast --particles 250000 --native-only")]
     Bench(bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
     Decks {
@@ -212,12 +237,12 @@ pub fn run(cli: Cli) -> Result<Verdict> {
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());
-            Ok(Verdict::Agree)
+            Ok(Verdict::Done)
         }
         Command::Completions { shell } => {
             use clap::CommandFactory;
             clap_complete::generate(shell, &mut Cli::command(), "verify", &mut std::io::stdout());
-            Ok(Verdict::Agree)
+            Ok(Verdict::Done)
         }
         Command::Man => {
             use clap::CommandFactory;
@@ -229,7 +254,7 @@ pub fn run(cli: Cli) -> Result<Verdict> {
             std::io::stdout()
                 .write_all(&out)
                 .map_err(|e| Error::io("stdout", e))?;
-            Ok(Verdict::Agree)
+            Ok(Verdict::Done)
         }
     }
 }
@@ -241,7 +266,7 @@ fn contact(a: ContactArgs) -> Result<Verdict> {
             let models: Vec<&str> = c.applicable_rolling().iter().map(|m| m.keyword()).collect();
             println!("{name:<22} [{}] {}", models.join(","), c.description);
         }
-        return Ok(Verdict::Agree);
+        return Ok(Verdict::Done);
     }
     if !(a.rtol.is_finite() && a.rtol > 0.0) {
         return Err(Error::invalid("--rtol", a.rtol, "a finite number > 0"));

@@ -123,7 +123,7 @@ pub fn sweep(a: SweepArgs) -> Result<Verdict> {
                 t.elapsed().as_secs_f64(),
                 stage_line(&res)
             );
-            Ok(Verdict::Agree)
+            Ok(Verdict::Done)
         }
         Some(SweepAction::Collect { dir }) => {
             let (results, total) = collect_dir(&dir)?;
@@ -132,11 +132,11 @@ pub fn sweep(a: SweepArgs) -> Result<Verdict> {
                 results.len(),
                 dir.join("results.csv").display()
             );
-            Ok(Verdict::Agree)
+            Ok(Verdict::Done)
         }
         Some(SweepAction::Report { dir, converged }) => {
             report(&dir, &converged)?;
-            Ok(Verdict::Agree)
+            Ok(Verdict::Done)
         }
         None => plan_and_run(a.plan),
     }
@@ -208,7 +208,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
             out.display(),
             out.display()
         );
-        return Ok(Verdict::Agree);
+        return Ok(Verdict::Done);
     }
     let done = m
         .runs
@@ -248,5 +248,5 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
     }
     collect_dir(&out)?;
     report(&out, &[])?;
-    Ok(Verdict::Agree)
+    Ok(Verdict::Done)
 }

@@ -32,6 +32,9 @@ pub const SCHEMA: u32 = 2;
 pub enum Verdict {
     Agree,
     Disagree,
+    /// A command that compares nothing (decks, lists, plans, completions): exit 0, no
+    /// verdict line.
+    Done,
 }
 
 impl Verdict {
