@@ -361,8 +361,14 @@ pub struct CodeSeries {
 impl ShearSummary {
     /// The verdict of the study: a study that compared nothing (one code only) is not a
     /// disagreement.
+    /// Agree or disagree on the comparisons made; `Done` when one code ran and nothing was
+    /// compared (no verdict line is printed then).
     pub fn verdict(&self) -> Verdict {
-        Verdict::from_pass(self.pass || self.results.is_empty())
+        if self.results.is_empty() {
+            Verdict::Done
+        } else {
+            Verdict::from_pass(self.pass)
+        }
     }
 }
 
