@@ -121,7 +121,13 @@ fn close(a: V3, b: V3, scale: f64) -> bool {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 4000, failure_persistence: None, ..ProptestConfig::default() })]
+    // a fixed seed: CI runs the same 4000 cases every time (set PROPTEST_RNG_SEED to explore)
+    #![proptest_config(ProptestConfig {
+        cases: 4000,
+        failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(20261202),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn third_law_and_angular_momentum(s in setup()) {
@@ -141,15 +147,18 @@ proptest! {
 
     #[test]
     fn invariant_under_translation_and_rotation(s in setup(), a in 0.0f64..6.3, b in -1.5f64..1.5, c in 0.0f64..6.3, t in v3(0.1)) {
-        let (fi, _, _, hi, xi, _) = eval(&s, &|v| v, [0.0; 3]);
+        let (fi, _, out, hi, xi, _) = eval(&s, &|v| v, [0.0; 3]);
         let (ft, _, _, ht, _, _) = eval(&s, &|v| v, t);
         // the overlap is radsum - |x_i - x_j|: positions of size |x| carry a round-off of
         // eps |x| into it, relative eps |x| / overlap, which the force inherits (x 1.5, Hertz)
         let overlap = (s.ri + s.rj) * s.overlap_frac;
         let tol = 1e-9 + 10.0 * f64::EPSILON * (norm(xi) + norm(t)) / overlap;
         let close = |a: V3, b: V3, scale: f64| close(a, b, scale * tol / 1e-9);
-        let scale_f = norm(fi.delta_f) + 1e-300;
-        let scale_t = norm(fi.delta_torque) + 1e-300;
+        // the scale is the elastic force kn deltan, not |F|: the damping can cancel most of
+        // it (a separating contact), and the round-off is the elastic part's
+        let elastic = out.normal.kn * overlap;
+        let scale_f = norm(fi.delta_f) + elastic + 1e-300;
+        let scale_t = norm(fi.delta_torque) + elastic * s.ri.max(s.rj) + 1e-300;
         prop_assert!(close(ft.delta_f, fi.delta_f, scale_f), "{:?} vs {:?}", ft.delta_f, fi.delta_f);
         prop_assert!(close(ft.delta_torque, fi.delta_torque, scale_t));
         let m = rotation(a, b, c);
