@@ -4,7 +4,13 @@
 mod common;
 
 use common::{text, verify};
-use dem_verify::run::shear::ShearSummary;
+use dem_verify::compare::steady;
+use dem_verify::packing::loose_packing;
+use dem_verify::report::progress::Progress;
+use dem_verify::run::shear::{mu_results, ShearSummary};
+use dem_verify::shear::{run_native, shear_series, Checkpointing};
+use dem_verify::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
+use dem_verify::spec::RollingModel;
 use std::path::Path;
 
 /// The study's outcome, read back typed (schema checked).
@@ -108,6 +114,49 @@ fn ci_preset_agrees_with_liggghts() {
         );
         assert!(seed.horizon.as_ref().unwrap().last_agree_step >= 500);
     }
+    // negative control: the same steady-mu comparison, the same LIGGGHTS runs, against native
+    // runs of the same seeds with a wrong sliding friction, must fail. The error must be one
+    // steady friction can show: mu_p only 10 % off moves it less than the seed scatter
+    // (measured on this preset, 6 paired seeds at (0.5, 0): x1.1 +0.022 +- 0.038, x0.9
+    // +0.027 +- 0.047, x1.2 -0.010 +- 0.064; at (0, 0) x1.1 -0.001 +- 0.031), so a 10 %
+    // error is caught by the step-by-step comparisons (tests/shear_offline.rs: agreement
+    // lost at once) and not by any steady comparison. mu_p x 0.3 (0.15) moved it by -0.17.
+    let lig = s.liggghts.as_ref().unwrap();
+    let wrong: Vec<_> = (1..=3)
+        .map(|seed| {
+            let (mut case, _) = ShearCase::build(&CaseRequest {
+                preset: Preset::Ci,
+                rolling: RollingModel::Epsd,
+                mu_r: 0.5,
+                eta_r: 0.5,
+                seed,
+                protocol: Protocol::default(),
+                overrides: Overrides::default(),
+                allow_inertial: false,
+            })
+            .unwrap();
+            case.material.friction *= 0.3;
+            let tmp = tempfile::tempdir().unwrap();
+            let run = run_native(
+                &case,
+                &loose_packing(&case),
+                tmp.path(),
+                &Progress::hidden(),
+                Checkpointing::Off,
+            )
+            .unwrap();
+            (case.box_x * case.box_z, shear_series(&case, &run.rows))
+        })
+        .collect();
+    let area = wrong[0].0;
+    let series: Vec<_> = wrong.into_iter().map(|w| w.1).collect();
+    let wrong = steady(&series, s.steady_window_steps, area);
+    let (control, _) = mu_results("control", "epsd", lig, &wrong, 0, 0.06);
+    eprintln!("negative control (mu_p x 0.3): {control:?}");
+    assert!(
+        control.iter().all(|r| !r.pass) && control.len() == 2,
+        "a friction 70 % off passes the steady comparison: {control:?}"
+    );
     for f in [
         "mu_strain.svg",
         "top_force.svg",

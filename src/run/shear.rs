@@ -378,6 +378,58 @@ impl super::Versioned for ShearSummary {
     }
 }
 
+/// The steady-friction channels of two codes' steady means over the same seeds: `mu_steady`
+/// (|difference| <= `mu_atol` and the 95 % CIs overlap) and, from [`PAIRED_MIN_SEEDS`] seeds
+/// on, `mu_paired` (fails only when the paired mean difference is both significant and larger
+/// than `mu_atol`); with the paired difference itself.
+///
+/// [`PAIRED_MIN_SEEDS`]: crate::compare::PAIRED_MIN_SEEDS
+pub fn mu_results(
+    label: &str,
+    model: &str,
+    l: &Steady,
+    n: &Steady,
+    window_end: u64,
+    mu_atol: f64,
+) -> (
+    Vec<crate::compare::ChannelResult>,
+    Option<crate::compare::Paired>,
+) {
+    let dmu = (l.mu - n.mu).abs();
+    let overlap = within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95);
+    let mut results = vec![crate::compare::ChannelResult {
+        case: label.into(),
+        model: model.into(),
+        channel: "mu_steady".into(),
+        unit: "-".into(),
+        max_abs_err: dmu,
+        max_rel_err: dmu / l.mu.abs().max(1e-12),
+        peak: l.mu.abs().max(n.mu.abs()),
+        worst_step: window_end,
+        rtol: mu_atol,
+        pass: dmu <= mu_atol && overlap,
+    }];
+    let paired_dmu = crate::compare::paired(&l.per_seed_mu, &n.per_seed_mu);
+    if let Some(p) = paired_dmu
+        .as_ref()
+        .filter(|p| p.n >= crate::compare::PAIRED_MIN_SEEDS)
+    {
+        results.push(crate::compare::ChannelResult {
+            case: label.into(),
+            model: model.into(),
+            channel: "mu_paired".into(),
+            unit: "-".into(),
+            max_abs_err: p.mean.abs(),
+            max_rel_err: p.mean.abs() / p.ci95,
+            peak: n.mu.abs(),
+            worst_step: window_end,
+            rtol: mu_atol,
+            pass: crate::compare::paired_agrees(p, mu_atol),
+        });
+    }
+    (results, paired_dmu)
+}
+
 /// Runs every seed of a shear case in the codes asked for (reusing stored per-seed results),
 /// compares them, writes plots and `summary.json` into the output directory, and returns the
 /// summary.
@@ -631,45 +683,14 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
             });
         }
     }
-    if let (Some(l), Some(n)) = (&ls, &ns) {
-        let dmu = (l.mu - n.mu).abs();
-        let overlap = within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95);
-        results.push(crate::compare::ChannelResult {
-            case: label.clone(),
-            model: model.clone(),
-            channel: "mu_steady".into(),
-            unit: "-".into(),
-            max_abs_err: dmu,
-            max_rel_err: dmu / l.mu.abs().max(1e-12),
-            peak: l.mu.abs().max(n.mu.abs()),
-            worst_step: window.1,
-            rtol: a.mu_atol,
-            pass: dmu <= a.mu_atol && overlap,
-        });
-    }
     let paired_dmu = match (&ls, &ns) {
-        (Some(l), Some(n)) => crate::compare::paired(&l.per_seed_mu, &n.per_seed_mu),
+        (Some(l), Some(n)) => {
+            let (r, p) = mu_results(&label, &model, l, n, window.1, a.mu_atol);
+            results.extend(r);
+            p
+        }
         _ => None,
     };
-    // the paired test (same packings in both codes) beside the CI-overlap rule, judged from
-    // PAIRED_MIN_SEEDS seeds on
-    if let Some(p) = paired_dmu
-        .as_ref()
-        .filter(|p| p.n >= crate::compare::PAIRED_MIN_SEEDS)
-    {
-        results.push(crate::compare::ChannelResult {
-            case: label.clone(),
-            model: model.clone(),
-            channel: "mu_paired".into(),
-            unit: "-".into(),
-            max_abs_err: p.mean.abs(),
-            max_rel_err: p.mean.abs() / p.ci95,
-            peak: ns.as_ref().map_or(f64::NAN, |n| n.mu.abs()),
-            worst_step: window.1,
-            rtol: a.mu_atol,
-            pass: crate::compare::paired_agrees(p, a.mu_atol),
-        });
-    }
     let profiles = CodeProfiles {
         liggghts: CodeProfiles::mean(
             &seeds
