@@ -98,10 +98,7 @@ fn budget(sim: &ShearSim, case: &ShearCase) -> Budget {
             }
         }
         for j in i + 1..n {
-            let mut d = [0.0; 3];
-            for k in 0..3 {
-                d[k] = sim.x[j][k] - sim.x[i][k];
-            }
+            let mut d: [f64; 3] = std::array::from_fn(|k| sim.x[j][k] - sim.x[i][k]);
             // minimum image in the periodic x and z
             for (k, l) in [(0, case.box_x), (2, case.box_z)] {
                 d[k] -= l * (d[k] / l).round();
