@@ -1,9 +1,11 @@
 //! The shear experiment in both codes from one case and one initial packing: runs, progress,
 //! and the common time series (plate forces, mu, height, kinetic energies).
 
-use crate::deck::shear::{shear_deck, PROFILE_PREFIX, SNAPSHOT_PREFIX, THERMO_COLUMNS};
+use crate::deck::shear::{
+    shear_deck_with, DeckExtras, PROFILE_PREFIX, RESTART_PREFIX, SNAPSHOT_PREFIX, THERMO_COLUMNS,
+};
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
+use crate::fsutil::{sha256_hex, write_atomic};
 use crate::liggghts::{dump_atoms, last_thermo_step, parse_err, read_thermo, Liggghts, LOG_NAME};
 use crate::packing::Packing;
 use crate::profile::{is_sample, profiles, schedule, ProfileSample, VelocityProfile};
@@ -103,6 +105,9 @@ pub struct CodeRun {
     pub compacted: Option<Packing>,
     /// The steady velocity profile of each stage ([`crate::profile`]).
     pub profiles: Vec<VelocityProfile>,
+    /// LIGGGHTS runs: the restart steps it was continued from after an interruption (the
+    /// series is then the uninterrupted run's up to the first of them, not after it).
+    pub resumed_from: Vec<u64>,
 }
 
 impl CodeRun {
@@ -334,6 +339,7 @@ pub fn run_native(
         steps: sim.step,
         compacted,
         profiles: profiles(case, &profile)?,
+        resumed_from: Vec::new(),
     };
     match std::fs::remove_file(out.join(CHECKPOINT_NAME)) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
@@ -344,28 +350,175 @@ pub fn run_native(
     Ok(run)
 }
 
+/// LIGGGHTS' particle-steps per second on one core, about (`verify bench`, 2026-12-02:
+/// 2.48e6): turns a checkpoint interval in wall time into a restart interval in steps.
+const LIGGGHTS_RATE: f64 = 2.5e6;
+
+/// Steps between LIGGGHTS restart files for a checkpoint interval: about that much wall time,
+/// a multiple of the output interval; None when off or when the run is shorter.
+pub fn restart_interval(case: &ShearCase, checkpoint: Checkpointing) -> Option<u64> {
+    let Checkpointing::Every(d) = checkpoint else {
+        return None;
+    };
+    let out = case.output_every.max(1);
+    let steps = d.as_secs_f64() * LIGGGHTS_RATE / case.particles.max(1) as f64;
+    let n = ((steps / out as f64).ceil().max(1.0) as u64).saturating_mul(out);
+    (n < case.total_steps()).then_some(n)
+}
+
+/// What a LIGGGHTS run directory holds of its interruptions (`resume.json`): the deck it
+/// belongs to, the logs of the earlier parts with the step each started from, and the step
+/// the running part (`log.liggghts`) started from.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+struct ResumeState {
+    deck_sha256: String,
+    earlier: Vec<(String, u64)>,
+    current_from: u64,
+}
+
+const RESUME_NAME: &str = "resume.json";
+
+/// Restart files `restart.<step>` in `dir`, by step.
+fn restart_files(dir: &Path) -> Vec<u64> {
+    let mut steps: Vec<u64> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .filter_map(|e| {
+            let name = e.ok()?.file_name().into_string().ok()?;
+            name.strip_prefix(RESTART_PREFIX)?.parse().ok()
+        })
+        .collect();
+    steps.sort_unstable();
+    steps
+}
+
+/// Removes all but the newest `keep` restart files.
+fn prune_restarts(dir: &Path, keep: usize) {
+    let steps = restart_files(dir);
+    for s in &steps[..steps.len().saturating_sub(keep)] {
+        let _ = std::fs::remove_file(dir.join(format!("{RESTART_PREFIX}{s}")));
+    }
+}
+
+/// Where an interrupted LIGGGHTS run of this deck can continue: the newest restart file whose
+/// step has a thermo line in the log (so the file is complete) and lies past the part's start.
+fn resume_point(dir: &Path, state: &ResumeState, deck_sha: &str, ncol: usize) -> Option<u64> {
+    if state.deck_sha256 != deck_sha {
+        return None;
+    }
+    let last = last_thermo_step(&dir.join(LOG_NAME), ncol)?;
+    restart_files(dir)
+        .into_iter()
+        .rfind(|s| *s <= last && *s > state.current_from)
+}
+
+/// The thermo rows of a run made of parts: the row of step `t` comes from the last part that
+/// started before `t` (the first part holds step 0; a part's own first row, at its restart
+/// step, has no forces yet and the part before it has that step).
+fn stitched_thermo(dir: &Path, state: &ResumeState, ncol: usize) -> Result<Vec<(u64, Vec<f64>)>> {
+    let mut rows = std::collections::BTreeMap::new();
+    let parts = state
+        .earlier
+        .iter()
+        .map(|(log, from)| (log.as_str(), *from))
+        .chain([(LOG_NAME, state.current_from)]);
+    for (k, (log, from)) in parts.enumerate() {
+        for (t, v) in read_thermo(&dir.join(log), ncol)? {
+            if t > from || k == 0 {
+                rows.insert(t, v);
+            }
+        }
+    }
+    Ok(rows.into_iter().collect())
+}
+
 /// Runs LIGGGHTS on the generated deck in `out/liggghts/` (kept: deck, data, meshes, log),
 /// converts its snapshots to VTK, and checks that no particle was lost.
+///
+/// With checkpointing on and a run long enough, the deck writes restart files about every
+/// `checkpoint` of wall time (the newest two kept, all removed at the end); a run of the same
+/// deck that was interrupted continues from the newest complete one. That continuation is not
+/// bit-identical to an uninterrupted run (see [`crate::deck::shear`]'s resume notes): the
+/// series is identical up to the restart step and statistically equivalent after it, and the
+/// run records the step in [`CodeRun::resumed_from`].
 pub fn run_liggghts(
     case: &ShearCase,
     packing: &Packing,
     lig: &Liggghts,
     out: &Path,
     progress: &Progress,
+    checkpoint: Checkpointing,
 ) -> Result<CodeRun> {
     let dir = out.join("liggghts");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    let deck = shear_deck(case, packing);
+    let extras = DeckExtras {
+        restart_every: restart_interval(case, checkpoint),
+        ..DeckExtras::default()
+    };
+    let full = shear_deck_with(case, packing, &extras);
+    let deck_sha = sha256_hex(
+        full.files
+            .iter()
+            .flat_map(|(n, t)| [n.as_bytes(), t.as_bytes()])
+            .collect::<Vec<_>>()
+            .concat()
+            .as_slice(),
+    );
     let ncol = THERMO_COLUMNS.len();
+    let state_path = dir.join(RESUME_NAME);
+    let mut state: ResumeState = std::fs::read_to_string(&state_path)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default();
+    let deck = match resume_point(&dir, &state, &deck_sha, ncol) {
+        Some(step) => {
+            // keep the interrupted part's log; the new part writes log.liggghts
+            let part = format!("log.{}.liggghts", state.earlier.len());
+            std::fs::rename(dir.join(LOG_NAME), dir.join(&part))
+                .map_err(|e| Error::io(dir.join(LOG_NAME), e))?;
+            state.earlier.push((part, state.current_from));
+            state.current_from = step;
+            eprintln!(
+                "LIGGGHTS seed {}: continuing from its restart file at step {step} (from there \
+                 on not bit-identical to an uninterrupted run)",
+                case.seed
+            );
+            shear_deck_with(
+                case,
+                packing,
+                &DeckExtras {
+                    resume_from: Some(step),
+                    ..extras.clone()
+                },
+            )
+        }
+        None => {
+            for s in restart_files(&dir) {
+                let _ = std::fs::remove_file(dir.join(format!("{RESTART_PREFIX}{s}")));
+            }
+            for (log, _) in &state.earlier {
+                let _ = std::fs::remove_file(dir.join(log));
+            }
+            state = ResumeState {
+                deck_sha256: deck_sha,
+                ..ResumeState::default()
+            };
+            full
+        }
+    };
+    let state_json = serde_json::to_string_pretty(&state).expect("plain data");
+    write_atomic(&state_path, state_json.as_bytes())?;
     let t0 = Instant::now();
     lig.run_with_progress(&deck, &dir, |d| {
         if let Some(s) = last_thermo_step(&d.join(LOG_NAME), ncol) {
             progress.set(s);
         }
+        prune_restarts(d, 2);
     })?;
     let wall = t0.elapsed().as_secs_f64();
     progress.finish();
-    let thermo = read_thermo(&dir.join(LOG_NAME), ncol)?;
+    prune_restarts(&dir, 0);
+    let thermo = stitched_thermo(&dir, &state, ncol)?;
     let mut rows = Vec::with_capacity(thermo.len());
     for (step, v) in thermo {
         let atoms = v[9] as usize;
@@ -403,12 +556,17 @@ pub fn run_liggghts(
         vtk::convert_liggghts_snapshots(&dir, SNAPSHOT_PREFIX, &out.join("vtk"))?;
     }
     let samples = read_profile_dumps(case, &dir, &rows, packing.radius.len())?;
+    let mut resumed_from: Vec<u64> = state.earlier.iter().skip(1).map(|p| p.1).collect();
+    if !state.earlier.is_empty() {
+        resumed_from.push(state.current_from);
+    }
     Ok(CodeRun {
         rows,
         wall_time: wall,
         steps: case.total_steps(),
         compacted: None,
         profiles: profiles(case, &samples)?,
+        resumed_from,
     })
 }
 

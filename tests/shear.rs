@@ -375,3 +375,137 @@ fn a_native_run_killed_at_a_random_step_resumes_to_identical_results() {
         );
     }
 }
+
+/// LIGGGHTS' side of checkpoints: a run whose deck writes restart files, SIGKILLed (with its
+/// LIGGGHTS child) part way through the shear, continues from the newest complete restart file
+/// when the same command runs again. What is identical and what is not: the series up to the
+/// restart step equals the uninterrupted run's bit for bit (the part before it is the same
+/// LIGGGHTS run), after it the run follows its own trajectory (LIGGGHTS' restart does not
+/// restore every piece of state bit for bit), so only its statistics are compared.
+#[test]
+fn an_interrupted_liggghts_run_continues_from_its_restart_file() {
+    use std::os::unix::process::CommandExt;
+    common::liggghts();
+    let dir = tempfile::tempdir().unwrap();
+    let args = |out: &Path| -> Vec<String> {
+        [
+            "shear",
+            "--preset",
+            "ci",
+            "--mu-r",
+            "0.5",
+            "--seeds",
+            "1",
+            "--liggghts-only",
+            "--checkpoint-every",
+            "0",
+            // one seed of 300 particles: its mean stress strays by 1-2 %
+            "--stress-rtol",
+            "0.05",
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |out: &Path| {
+        let a = args(out);
+        verify(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let whole = dir.path().join("whole");
+    let o = run(&whole);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let lig_dir = |out: &Path| out.join("seed1/liggghts");
+    let restarts = |out: &Path| -> Vec<String> {
+        std::fs::read_dir(lig_dir(out))
+            .unwrap()
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.starts_with("restart."))
+            .collect()
+    };
+    assert!(
+        restarts(&whole).is_empty(),
+        "a finished run keeps no restart files"
+    );
+    // the same run, killed (verify and LIGGGHTS: its own process group) in the shear stage
+    let cut = dir.path().join("cut");
+    let child = std::process::Command::new(common::verify_bin())
+        .args(args(&cut))
+        .process_group(0)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let log = lig_dir(&cut).join("log.liggghts");
+    let t0 = std::time::Instant::now();
+    loop {
+        let last = dem_verify::liggghts::last_thermo_step(&log, 10).unwrap_or(0);
+        if last >= 40_000 {
+            break;
+        }
+        assert!(
+            t0.elapsed().as_secs() < 300,
+            "LIGGGHTS did not reach step 40000"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: a signal to the child's process group, which the child leads
+    unsafe { libc::kill(-(child.id() as i32), libc::SIGKILL) };
+    let mut child = child;
+    let _ = child.wait();
+    assert!(
+        !restarts(&cut).is_empty(),
+        "no restart file to continue from"
+    );
+    let o = run(&cut);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    let at: u64 = t
+        .split("continuing from its restart file at step ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no continuation reported: {t}"));
+    assert!((40_000..95_000).contains(&at), "{at}");
+    assert!(
+        restarts(&cut).is_empty(),
+        "a finished run keeps no restart files"
+    );
+    let rec: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(cut.join("seed1/liggghts_run.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(rec["resumed_from"], serde_json::json!([at]));
+    let read =
+        |out: &Path| dem_verify::series::Series::read_csv(&out.join("seed1/liggghts.csv")).unwrap();
+    let (a, b) = (read(&whole), read(&cut));
+    assert_eq!(
+        a.steps, b.steps,
+        "the continued series has every output step"
+    );
+    let k = a.steps.iter().position(|s| *s == at).unwrap();
+    // bits, so that the NaN columns (LIGGGHTS has no mobilised fraction) compare equal
+    let bits = |r: &Vec<f64>| r.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let same = |i: usize| bits(&a.rows[i]) == bits(&b.rows[i]);
+    let first_diff = (0..a.rows.len()).find(|i| !same(*i));
+    assert!(
+        first_diff.is_some_and(|i| i > k),
+        "identical up to the restart step {at}: first difference at step {:?}",
+        first_diff.map(|i| a.steps[i])
+    );
+    let differ = (k + 1..a.rows.len()).filter(|i| !same(*i)).count();
+    eprintln!(
+        "continued at step {at}: {differ} of {} later rows differ from the uninterrupted run",
+        a.rows.len() - k - 1
+    );
+    let summary = |out: &Path| summary(out).liggghts.unwrap();
+    let (sa, sb) = (summary(&whole), summary(&cut));
+    eprintln!("steady mu: uninterrupted {} continued {}", sa.mu, sb.mu);
+    assert!((sa.mu - sb.mu).abs() < 0.1, "{} vs {}", sa.mu, sb.mu);
+    // the servo still holds the target stress (10 MPa) after the restart
+    assert!(
+        (sb.normal_stress / 10e6 - 1.0).abs() < 0.05,
+        "{}",
+        sb.normal_stress
+    );
+}

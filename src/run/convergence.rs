@@ -157,6 +157,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
                                 lig.as_ref().expect("located"),
                                 &dir,
                                 &Progress::hidden(),
+                                Checkpointing::Every(CHECKPOINT_EVERY),
                             )?
                         } else {
                             run_native(

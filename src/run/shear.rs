@@ -103,6 +103,9 @@ struct RunRecord {
     rows: Option<usize>,
     #[serde(default)]
     sha256: Option<String>,
+    /// LIGGGHTS: the restart steps an interrupted run continued from ([`CodeRun::resumed_from`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    resumed_from: Vec<u64>,
 }
 
 /// A finished run stored in `dir` by [`store`], if it is of `case` and complete: the record
@@ -165,6 +168,7 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
         steps: rec.steps,
         compacted: None,
         profiles,
+        resumed_from: rec.resumed_from,
     })
 }
 
@@ -179,6 +183,7 @@ fn store(dir: &Path, code: &str, case: &ShearCase, run: &CodeRun) -> Result<Seri
         steps: run.steps,
         rows: Some(s.rows.len()),
         sha256: Some(crate::fsutil::sha256_hex(&bytes)),
+        resumed_from: run.resumed_from.clone(),
     };
     write_atomic(
         &dir.join(format!("{code}_profile.csv")),
@@ -222,7 +227,16 @@ pub fn shear_lockstep(
     let c = lockstep_case(case, steps);
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let (l, n) = std::thread::scope(|sc| {
-        let h = sc.spawn(|| run_liggghts(&c, compacted, lig, dir, &Progress::hidden()));
+        let h = sc.spawn(|| {
+            run_liggghts(
+                &c,
+                compacted,
+                lig,
+                dir,
+                &Progress::hidden(),
+                Checkpointing::Off,
+            )
+        });
         let n = run_native(&c, compacted, dir, &Progress::hidden(), Checkpointing::Off);
         (h.join().expect("LIGGGHTS thread"), n)
     });
@@ -578,7 +592,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                         Progress::new(&multi, &format!("LIGGGHTS s{}", case.seed), total, case.dt)
                     };
                     let (packing, dir) = (&packing, &dir);
-                    Some(sc.spawn(move || run_liggghts(case, packing, l, dir, &p)))
+                    Some(sc.spawn(move || run_liggghts(case, packing, l, dir, &p, a.checkpoint)))
                 }
                 _ => None,
             };

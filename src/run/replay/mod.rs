@@ -173,6 +173,7 @@ pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Resu
         thermo_every: Some(1),
         end_step: Some(end),
         before_runs: replay_dumps(&windows, n_hist),
+        ..DeckExtras::default()
     };
     let dir = req.out.join("liggghts");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
