@@ -26,6 +26,9 @@ pub struct Point {
     pub erot: f64,
     pub dashpot_stable: bool,
     pub stability_s: f64,
+    /// Where the number comes from: rolling model and dt, and for substitutes the directory
+    /// and the study's verdict (set by the report; empty from [`aggregate`]).
+    pub source: String,
 }
 
 /// Aggregates run results into points, sorted by code, stage, eta_r, mu_r.
@@ -76,6 +79,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
             erot: vals.iter().map(|v| v.1).sum::<f64>() / vals.len() as f64,
             dashpot_stable: runs.iter().all(|r| r.dashpot_stable),
             stability_s: runs.iter().map(|r| r.stability_s).fold(0.0, f64::max),
+            source: String::new(),
         });
     }
     pts.sort_by(|a, b| {
@@ -352,42 +356,85 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
     out
 }
 
+/// How a heat map draws its cells: the colour scale, a mark appended to a cell's value, and
+/// legend lines under the map.
+pub struct HeatStyle<'a> {
+    /// Colour scale (low, high); None: the points' own range. Maps that are compared share one.
+    pub range: Option<(f64, f64)>,
+    /// A mark after the value (e.g. a source's symbol); unstable points get " †" regardless.
+    pub mark: &'a dyn Fn(&Point) -> String,
+    pub legend: Vec<String>,
+}
+
+impl Default for HeatStyle<'_> {
+    fn default() -> Self {
+        HeatStyle {
+            range: None,
+            mark: &|_| String::new(),
+            legend: Vec::new(),
+        }
+    }
+}
+
+/// The (low, high) of the finite mu of several point sets: one colour scale for maps that are
+/// read side by side.
+pub fn mu_range<'a>(points: impl IntoIterator<Item = &'a Point>) -> Option<(f64, f64)> {
+    let (lo, hi) = points
+        .into_iter()
+        .filter(|p| p.mu.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.mu), b.max(p.mu))
+        });
+    (lo <= hi).then_some((lo, hi))
+}
+
 /// Heat map of mu over (mu_r, eta_r) for one code and stage, as an SVG document (plotters):
-/// one cell per point, light yellow (low mu) to dark blue (high mu), its mu written in it;
-/// points where the explicit dashpot is unstable get a red frame and a dagger.
-pub fn heat_map(title: &str, points: &[&Point]) -> Result<String> {
+/// one cell per point, light yellow (low mu) to dark blue (high mu) with a colour bar, its mu
+/// written in it; points where the explicit dashpot is unstable get a red frame and a dagger;
+/// a cell without a point says "none".
+pub fn heat_map(title: &str, points: &[&Point], style: &HeatStyle) -> Result<String> {
     let mut mus: Vec<f64> = points.iter().map(|p| p.mu_r).collect();
     mus.sort_by(f64::total_cmp);
     mus.dedup();
     let mut etas: Vec<f64> = points.iter().map(|p| p.eta_r).collect();
     etas.sort_by(f64::total_cmp);
     etas.dedup();
-    let (lo, hi) = points
-        .iter()
-        .filter(|p| p.mu.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-            (a.min(p.mu), b.max(p.mu))
-        });
+    let (lo, hi) = style
+        .range
+        .or_else(|| mu_range(points.iter().copied()))
+        .unwrap_or((0.0, 1.0));
     // colour: light yellow (low mu) to dark blue (high mu)
     let color = |v: f64| {
-        let t = if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+        let t = if hi > lo {
+            ((v - lo) / (hi - lo)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
         let lerp = |a: f64, b: f64| (a + (b - a) * t).round() as u8;
         (
             RGBColor(lerp(255.0, 8.0), lerp(247.0, 48.0), lerp(188.0, 107.0)),
             t,
         )
     };
+    let mut legend =
+        vec!["† red frame: explicit rolling dashpot unstable at this dt (S ≥ 4)".to_string()];
+    legend.extend(style.legend.iter().cloned());
     let (cw, ch) = (110u32, 60u32);
-    let w = 120 + cw * mus.len() as u32 + 30;
-    let h = 60 + ch * etas.len() as u32 + 110;
+    // map, then the colour bar and its labels; wide enough for the legend's longest line
+    let map_w = 120 + cw * mus.len() as u32;
+    let legend_w = legend.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32 * 7 + 40;
+    let w = (map_w + 110).max(legend_w);
+    let h = 60 + ch * etas.len() as u32 + 70 + 18 * legend.len() as u32;
     let mut s = String::new();
     {
         let root = SVGBackend::with_string(&mut s, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        let mut chart = ChartBuilder::on(&root)
+        let (map_area, _) = root.split_horizontally(map_w + 10);
+        let map_area = map_area.margin(0, 18 * legend.len() as u32, 0, 0);
+        let mut chart = ChartBuilder::on(&map_area)
             .caption(title, ("sans-serif", 16))
             .margin(10)
-            .margin_bottom(40)
+            .margin_bottom(20)
             .x_label_area_size(45)
             .y_label_area_size(90)
             .build_cartesian_2d(0.0..mus.len() as f64, 0.0..etas.len() as f64)
@@ -417,14 +464,27 @@ pub fn heat_map(title: &str, points: &[&Point]) -> Result<String> {
             })
             .draw()
             .map_err(draw_err)?;
+        let text = |label: String, at: (i32, i32), size: u32, ink: &RGBColor| {
+            root.draw(&Text::new(
+                label,
+                at,
+                ("sans-serif", size)
+                    .into_font()
+                    .color(ink)
+                    .pos(Pos::new(HPos::Center, VPos::Center)),
+            ))
+            .map_err(draw_err)
+        };
         for (j, e) in etas.iter().enumerate() {
             for (i, m) in mus.iter().enumerate() {
+                let (x, y) = (i as f64, j as f64);
+                let cell = [(x, y), (x + 1.0, y + 1.0)];
+                let (px, py) = chart.backend_coord(&(x + 0.5, y + 0.5));
                 let Some(p) = points.iter().find(|p| p.mu_r == *m && p.eta_r == *e) else {
+                    text("none".into(), (px, py), 13, &RGBColor(128, 128, 128))?;
                     continue;
                 };
                 let (fill, t) = color(p.mu);
-                let (x, y) = (i as f64, j as f64);
-                let cell = [(x, y), (x + 1.0, y + 1.0)];
                 chart
                     .draw_series([Rectangle::new(cell, fill.filled())])
                     .map_err(draw_err)?;
@@ -437,25 +497,49 @@ pub fn heat_map(title: &str, points: &[&Point]) -> Result<String> {
                     .draw_series([Rectangle::new(cell, frame)])
                     .map_err(draw_err)?;
                 let ink = if t > 0.55 { WHITE } else { BLACK };
-                let label = format!("{:.3}{}", p.mu, if p.dashpot_stable { "" } else { " †" });
-                let (px, py) = chart.backend_coord(&(x + 0.5, y + 0.5));
-                root.draw(&Text::new(
-                    label,
-                    (px, py),
-                    ("sans-serif", 14)
-                        .into_font()
-                        .color(&ink)
-                        .pos(Pos::new(HPos::Center, VPos::Center)),
-                ))
-                .map_err(draw_err)?;
+                let label = format!(
+                    "{:.3}{}{}",
+                    p.mu,
+                    if p.dashpot_stable { "" } else { " †" },
+                    (style.mark)(p)
+                );
+                text(label, (px, py), 14, &ink)?;
             }
         }
-        root.draw(&Text::new(
-            "† red frame: explicit rolling dashpot unstable at this dt (S ≥ 4)",
-            (20, h as i32 - 18),
-            ("sans-serif", 12),
-        ))
-        .map_err(draw_err)?;
+        // colour bar: 20 steps from low (bottom) to high (top), labelled at both ends and
+        // in the middle
+        let (top, bottom) = (
+            chart.backend_coord(&(0.0, etas.len() as f64)).1,
+            chart.backend_coord(&(0.0, 0.0)).1,
+        );
+        let x0 = map_w as i32 + 20;
+        let n = 20;
+        for k in 0..n {
+            let y1 = bottom - (bottom - top) * k / n;
+            let y0 = bottom - (bottom - top) * (k + 1) / n;
+            let v = lo + (hi - lo) * (k as f64 + 0.5) / n as f64;
+            root.draw(&Rectangle::new(
+                [(x0, y0), (x0 + 18, y1)],
+                color(v).0.filled(),
+            ))
+            .map_err(draw_err)?;
+        }
+        for (v, y) in [
+            (lo, bottom),
+            (0.5 * (lo + hi), (top + bottom) / 2),
+            (hi, top),
+        ] {
+            text(format!("{v:.3}"), (x0 + 50, y), 12, &BLACK)?;
+        }
+        text("mu".into(), (x0 + 9, top - 12), 12, &BLACK)?;
+        for (k, line) in legend.iter().enumerate() {
+            root.draw(&Text::new(
+                line.clone(),
+                (20, h as i32 - 18 * (legend.len() - k) as i32),
+                ("sans-serif", 12),
+            ))
+            .map_err(draw_err)?;
+        }
         root.present().map_err(draw_err)?;
     }
     Ok(s)
@@ -577,11 +661,13 @@ mod tests {
                 .iter()
                 .filter(|p| p.stage == 0)
                 .collect::<Vec<_>>(),
+            &HeatStyle::default(),
         )
         .unwrap();
-        // 6 points (3 mu_r x 2 eta_r): a filled cell and a frame each, on the background;
-        // mu_r 1 (unstable) framed red, its values marked with a dagger
-        assert_eq!(h.matches("<rect").count(), 1 + 12, "{h}");
+        // 6 points (3 mu_r x 2 eta_r): a filled cell and a frame each, on the background,
+        // and the colour bar's 20 steps; mu_r 1 (unstable) framed red, its values marked with
+        // a dagger
+        assert_eq!(h.matches("<rect").count(), 1 + 12 + 20, "{h}");
         assert_eq!(
             h.matches("stroke=\"#FF0000\"").count(),
             2,

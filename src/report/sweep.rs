@@ -2,13 +2,16 @@
 //! maps), its three conclusions checked at the sweep's dt and on converged-dt results, and the
 //! table of points (DIR/report.html, DIR/report.json).
 
+use crate::compare::within_cis;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::report::html::{table, text_rows, Page};
-use crate::report::paper::{aggregate, conclusions, heat_map, ClaimVerdict, Conclusion, Point};
+use crate::report::paper::{
+    aggregate, conclusions, heat_map, mu_range, ClaimVerdict, Conclusion, HeatStyle, Point,
+};
 use crate::report::plot::{line_plot, Curve};
 use crate::run::convergence_outcome::{ConvergenceSummary, StudyCode};
-use crate::run::sweep::{collect, Manifest};
+use crate::run::sweep::{collect, Manifest, RunResult};
 use crate::run::Code;
 use maud::html;
 use serde::Serialize;
@@ -46,17 +49,40 @@ struct SweepReport {
     conclusions: Vec<(Code, Vec<Conclusion>)>,
     converged_points: Vec<Point>,
     converged_conclusions: Vec<(Code, Vec<Conclusion>)>,
+    /// Every point as the conclusions on trustworthy numbers use it, with its source.
+    judged: Vec<JudgedPoint>,
     runs: usize,
     run_wall_s_liggghts: f64,
     run_wall_s_native: f64,
 }
 
-/// The smaller-dt points of `dir`: a sweep (manifest.json: every result aggregated) or a
-/// `verify convergence` output (summary.json: native at its finest dt).
+/// The last component of a directory's path, for labels.
+fn dir_name(dir: &Path) -> String {
+    dir.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| dir.display().to_string())
+}
+
+/// A sweep's points labelled with their model and dt.
+fn sweep_points(m: &Manifest, results: &[RunResult], tag: &str) -> Vec<Point> {
+    let dt = results.first().map_or(f64::NAN, |r| r.dt);
+    let mut points = aggregate(results);
+    for p in &mut points {
+        p.source = format!("{} at dt {dt:.3e} s{tag}", m.base.rolling);
+    }
+    points
+}
+
+/// The points of `dir` that stand in for points unstable at the sweep's dt: a sweep at a
+/// smaller dt or with the stable dashpot (manifest.json: every result aggregated) or a `verify
+/// convergence` output (summary.json: native at its finest dt, with the study's verdict).
+/// Each is labelled with where it comes from.
 fn converged_points(dir: &Path) -> Result<Vec<Point>> {
+    let name = dir_name(dir);
     if dir.join("manifest.json").is_file() {
         let cm = Manifest::load(&dir.join("manifest.json"))?;
-        return Ok(aggregate(&collect(&cm, dir).0));
+        let (res, _) = collect(&cm, dir);
+        return Ok(sweep_points(&cm, &res, &format!(" ({name})")));
     }
     let bad = || {
         Error::invalid(
@@ -93,7 +119,103 @@ fn converged_points(dir: &Path) -> Result<Vec<Point>> {
         erot: finest.steady.erot,
         dashpot_stable: finest.stability.stable,
         stability_s: finest.stability.entries.first().ok_or_else(bad)?.criterion,
+        source: format!(
+            "{} at dt {:.3e} s (convergence study {name}: {})",
+            v.rolling,
+            finest.dt,
+            if v.converged {
+                "converged"
+            } else {
+                "NOT shown converged"
+            }
+        ),
     }])
+}
+
+/// A point as the conclusions on trustworthy numbers use it: as run where the explicit dashpot
+/// is stable, else the first stand-in given for it (in `--converged` order), checked against
+/// any further stand-ins; None where there is none.
+#[derive(Clone, Debug, Serialize)]
+pub struct JudgedPoint {
+    pub code: Code,
+    pub stage: usize,
+    pub mu_r: f64,
+    pub eta_r: f64,
+    pub point: Option<Point>,
+    pub substituted: bool,
+    /// Where the number comes from and what it was checked against.
+    pub note: String,
+}
+
+fn judge(points: &[Point], stand_ins: &[Point]) -> Vec<JudgedPoint> {
+    points
+        .iter()
+        .map(|p| {
+            let base = |point: Option<Point>, substituted, note: String| JudgedPoint {
+                code: p.code,
+                stage: p.stage,
+                mu_r: p.mu_r,
+                eta_r: p.eta_r,
+                point,
+                substituted,
+                note,
+            };
+            if p.dashpot_stable {
+                return base(
+                    Some(p.clone()),
+                    false,
+                    format!("as run ({}; stable, S = {:.2})", p.source, p.stability_s),
+                );
+            }
+            let cands: Vec<&Point> = stand_ins
+                .iter()
+                .filter(|c| {
+                    c.code == p.code && c.stage == p.stage && c.mu_r == p.mu_r && c.eta_r == p.eta_r
+                })
+                .collect();
+            let Some((c, rest)) = cands.split_first() else {
+                return base(
+                    None,
+                    false,
+                    format!(
+                        "unstable at the sweep's dt (S = {:.2}) and no stable or converged result \
+                         given",
+                        p.stability_s
+                    ),
+                );
+            };
+            let checks: Vec<String> = rest
+                .iter()
+                .map(|q| {
+                    format!(
+                        "{} {} ({:.4} ± {:.4})",
+                        if within_cis(c.mu, c.mu_ci95, q.mu, q.mu_ci95) {
+                            "agrees with"
+                        } else {
+                            "DIFFERS from"
+                        },
+                        q.source,
+                        q.mu,
+                        q.mu_ci95
+                    )
+                })
+                .collect();
+            base(
+                Some((*c).clone()),
+                true,
+                format!(
+                    "from {} (unstable at the sweep's dt, S = {:.2}); {}",
+                    c.source,
+                    p.stability_s,
+                    if checks.is_empty() {
+                        "not checked against another dt or model".to_string()
+                    } else {
+                        checks.join("; ")
+                    }
+                ),
+            )
+        })
+        .collect()
 }
 
 /// The paper's figures, the conclusions and a report page from DIR's (current) results.
@@ -106,7 +228,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             dir.display()
         )));
     }
-    let points = aggregate(&results);
+    let points = sweep_points(&m, &results, "");
     let mut conv_points = Vec::new();
     for c in converged {
         conv_points.extend(converged_points(c)?);
@@ -121,21 +243,12 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         .map(|&c| (c, conclusions(&points, c)))
         .collect();
     // the conclusions judged on trustworthy numbers: each point where the explicit dashpot is
-    // stable as it is, each unstable point by its converged-dt result, unstable points
-    // without one left out
-    let judged: Vec<Point> = points
+    // stable as it is, each unstable point by its stand-in, unstable points without one left
+    // out (and said so)
+    let judged_points = judge(&points, &conv_points);
+    let judged: Vec<Point> = judged_points
         .iter()
-        .filter_map(|p| {
-            if p.dashpot_stable {
-                return Some(p.clone());
-            }
-            conv_points
-                .iter()
-                .find(|c| {
-                    c.code == p.code && c.stage == p.stage && c.mu_r == p.mu_r && c.eta_r == p.eta_r
-                })
-                .cloned()
-        })
+        .filter_map(|j| j.point.clone())
         .collect();
     let conv_concl: Vec<(Code, Vec<Conclusion>)> = if conv_points.is_empty() {
         Vec::new()
@@ -154,18 +267,28 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     let inv: Option<serde_json::Value> = std::fs::read_to_string(dir.join("last_invocation.json"))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok());
+    let hours = |w: f64, code: &str| {
+        if results.iter().any(|r| match code {
+            "native" => r.native_wall_s.is_some(),
+            _ => r.liggghts_wall_s.is_some(),
+        }) {
+            format!("{code} {:.2} h", w / 3600.0)
+        } else {
+            format!("{code} not run")
+        }
+    };
     page.push(html! { p.meta { (format!(
-        "{} of {} runs ({} preset, {}, engine {:?}, dt factor {}, created {}). \
-         Run wall time summed over runs: native {:.2} h, LIGGGHTS {:.2} h{}.",
+        "{} of {} runs ({} preset, {}, engine {}, dt factor {}, created {}). \
+         Run wall time summed over runs: {}, {}{}.",
         results.len(),
         m.runs.len(),
         m.base.preset,
         m.base.rolling,
-        m.base.engine,
+        m.base.engine.keyword(),
         m.base.protocol.dt_factor,
         m.created_utc,
-        wall_n / 3600.0,
-        wall_l / 3600.0,
+        hours(wall_n, "native"),
+        hours(wall_l, "LIGGGHTS"),
         inv.map(|v| format!(
             "; last local invocation: {:.2} h wall with {} job(s) for {} runs",
             v["wall_s"].as_f64().unwrap_or(f64::NAN) / 3600.0,
@@ -178,6 +301,61 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         page.push(html! { p.warn {
             (missing.len()) " runs have no result yet: the figures show what exists."
         } });
+    }
+    page.heading("bottom-line", "Bottom line");
+    {
+        let mut rows: Vec<Vec<(String, &str)>> = Vec::new();
+        let class = |v: ClaimVerdict| match v {
+            ClaimVerdict::Agrees => "pass",
+            ClaimVerdict::Disagrees => "fail",
+            _ => "warn",
+        };
+        for (code, cs) in &concl {
+            let conv = conv_concl.iter().find(|(c, _)| c == code).map(|c| &c.1);
+            for (k, c) in cs.iter().enumerate() {
+                let j = conv.and_then(|v| v.get(k));
+                rows.push(vec![
+                    (format!("{code}"), ""),
+                    (c.claim.clone(), ""),
+                    (c.verdict.words().to_string(), class(c.verdict)),
+                    j.map_or(
+                        ("no stable or converged results given".into(), "warn"),
+                        |j| (j.verdict.words().to_string(), class(j.verdict)),
+                    ),
+                    (j.map_or(c.evidence.clone(), |j| j.evidence.clone()), ""),
+                ]);
+            }
+        }
+        page.push(table(
+            &[
+                "code",
+                "the paper's claim",
+                "at the sweep's dt (as the paper ran it)",
+                "on stable or converged numbers",
+                "evidence (stable or converged numbers where given)",
+            ],
+            &text_rows(rows),
+        ));
+        let missing_judged: Vec<String> = judged_points
+            .iter()
+            .filter(|j| j.point.is_none())
+            .map(|j| format!("{} (mu_r {}, eta_r {})", j.code, j.mu_r, j.eta_r))
+            .collect();
+        let substituted = judged_points.iter().filter(|j| j.substituted).count();
+        page.para(&format!(
+            "{} of {} points are unstable at the sweep's dt; {substituted} of them are judged on \
+             a stand-in (its source and checks in the table){}.",
+            points.iter().filter(|p| !p.dashpot_stable).count(),
+            points.len(),
+            if missing_judged.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; without one, left out of the judgement: {}",
+                    missing_judged.join(", ")
+                )
+            }
+        ));
     }
     page.heading("conclusions", "The paper's conclusions, checked");
     for (title, set) in [
@@ -319,30 +497,86 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             fig_html.push(page.svg_file(&path, &format!("Steady μ against speed at μr = {m_r}."))?);
         }
     }
-    // heat maps
+    // heat maps: as run, and as judged (stand-ins marked), on one colour scale
+    let range = mu_range(points.iter().chain(&judged));
     for code in &codes {
         for &(k, speed) in &stages {
-            for (set, tag) in [(&points, ""), (&conv_points, "_converged")] {
-                let sel: Vec<&Point> = set
-                    .iter()
-                    .filter(|p| p.code == *code && p.stage == k)
-                    .collect();
-                if sel.is_empty() {
-                    continue;
-                }
-                let svg = heat_map(
-                    &format!(
-                        "steady mu, {code}, {speed} m/s{}",
-                        if tag.is_empty() { "" } else { ", converged dt" }
-                    ),
-                    &sel,
-                )?;
-                write_atomic(
-                    &figs.join(format!("heat_{code}_stage{k}{tag}.svg")),
-                    svg.as_bytes(),
-                )?;
-                fig_html.push(page.svg(&svg, &format!("Steady μ over (μr, ηr), {code}.")));
+            let sel: Vec<&Point> = points
+                .iter()
+                .filter(|p| p.code == *code && p.stage == k)
+                .collect();
+            if sel.is_empty() {
+                continue;
             }
+            let style = HeatStyle {
+                range,
+                ..HeatStyle::default()
+            };
+            let svg = heat_map(
+                &format!("steady mu, {code}, {speed} m/s, {}", sel[0].source),
+                &sel,
+                &style,
+            )?;
+            write_atomic(
+                &figs.join(format!("heat_{code}_stage{k}.svg")),
+                svg.as_bytes(),
+            )?;
+            fig_html.push(page.svg(
+                &svg,
+                &format!("Steady μ over (μr, ηr), {code}, as run at the sweep's dt."),
+            ));
+            let jsel: Vec<&Point> = judged_points
+                .iter()
+                .filter(|j| j.code == *code && j.stage == k)
+                .filter_map(|j| j.point.as_ref())
+                .collect();
+            if conv_points.is_empty() || jsel.is_empty() {
+                continue;
+            }
+            let substituted = |p: &Point| {
+                judged_points.iter().any(|j| {
+                    j.substituted
+                        && j.code == p.code
+                        && j.stage == p.stage
+                        && j.mu_r == p.mu_r
+                        && j.eta_r == p.eta_r
+                })
+            };
+            let mut sources: Vec<String> = jsel
+                .iter()
+                .filter(|p| substituted(p))
+                .map(|p| format!("‡ from {}", p.source))
+                .collect();
+            sources.sort();
+            sources.dedup();
+            let mark = |p: &Point| {
+                if substituted(p) {
+                    " ‡".into()
+                } else {
+                    String::new()
+                }
+            };
+            let style = HeatStyle {
+                range,
+                mark: &mark,
+                legend: sources,
+            };
+            let svg = heat_map(
+                &format!("steady mu, {code}, {speed} m/s, on stable or converged numbers"),
+                &jsel,
+                &style,
+            )?;
+            write_atomic(
+                &figs.join(format!("heat_{code}_stage{k}_judged.svg")),
+                svg.as_bytes(),
+            )?;
+            fig_html.push(page.svg(
+                &svg,
+                &format!(
+                    "Steady μ over (μr, ηr), {code}, on stable or converged numbers: each point \
+                     unstable at the sweep's dt replaced by its stand-in (‡, same colour scale)."
+                ),
+            ));
         }
     }
     page.figures(&fig_html);
@@ -350,13 +584,14 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     let rows: Vec<Vec<(String, &'static str)>> = points
         .iter()
         .map(|p| {
-            let conv = conv_points
-                .iter()
-                .find(|q| {
-                    q.code == p.code && q.stage == p.stage && q.mu_r == p.mu_r && q.eta_r == p.eta_r
-                })
+            let j = judged_points.iter().find(|q| {
+                q.code == p.code && q.stage == p.stage && q.mu_r == p.mu_r && q.eta_r == p.eta_r
+            });
+            let conv = j
+                .and_then(|j| j.point.as_ref())
                 .map(|q| format!("{:.4} ± {:.4}", q.mu, q.mu_ci95))
                 .unwrap_or("–".into());
+            let note = j.map(|j| j.note.clone()).unwrap_or_default();
             vec![
                 (p.code.to_string(), ""),
                 (format!("{}", p.speed), "num"),
@@ -370,6 +605,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                     if p.dashpot_stable { "pass" } else { "warn" },
                 ),
                 (conv, "num"),
+                (note, ""),
             ]
         })
         .collect();
@@ -383,7 +619,8 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             "seeds",
             "E_rot [J]",
             "stability S (unstable ≥ 4)",
-            "converged dt mu",
+            "judged mu",
+            "judged from",
         ],
         &text_rows(rows),
     ));
@@ -394,6 +631,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         conclusions: concl,
         converged_points: conv_points,
         converged_conclusions: conv_concl,
+        judged: judged_points,
         runs: results.len(),
         run_wall_s_liggghts: wall_l,
         run_wall_s_native: wall_n,
@@ -420,4 +658,52 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(mu_r: f64, mu: f64, stable: bool, source: &str) -> Point {
+        Point {
+            code: Code::Native,
+            mu_r,
+            eta_r: 0.5,
+            stage: 0,
+            speed: 0.02,
+            mu,
+            mu_ci95: 0.01,
+            seeds: 3,
+            erot: 0.0,
+            dashpot_stable: stable,
+            stability_s: if stable { 1.0 } else { 10.0 },
+            source: source.into(),
+        }
+    }
+
+    #[test]
+    fn unstable_points_take_the_first_stand_in_checked_against_the_others() {
+        let points = [
+            point(0.25, 0.5, true, "epsd at dt 1.5e-6"),
+            point(0.5, 0.2, false, "epsd at dt 1.5e-6"),
+            point(1.0, 0.2, false, "epsd at dt 1.5e-6"),
+        ];
+        let stand_ins = [
+            point(0.5, 0.60, true, "epsd_implicit"),
+            point(0.5, 0.61, true, "epsd dt/4"),
+            point(0.5, 0.70, true, "epsd dt/8"),
+        ];
+        let j = judge(&points, &stand_ins);
+        assert!(!j[0].substituted && j[0].point.as_ref().unwrap().mu == 0.5);
+        assert!(j[1].substituted && j[1].point.as_ref().unwrap().mu == 0.60);
+        assert!(
+            j[1].note.contains("from epsd_implicit")
+                && j[1].note.contains("agrees with epsd dt/4")
+                && j[1].note.contains("DIFFERS from epsd dt/8"),
+            "{}",
+            j[1].note
+        );
+        // no stand-in: left out, and said so
+        assert!(j[2].point.is_none() && j[2].note.contains("no stable or converged result"));
+    }
 }

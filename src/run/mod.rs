@@ -69,6 +69,14 @@ impl Engine {
             }),
         }
     }
+    /// The CLI's word for it.
+    pub fn keyword(self) -> &'static str {
+        match self {
+            Engine::Native => "native",
+            Engine::Liggghts => "liggghts",
+            Engine::Both => "both",
+        }
+    }
     pub fn runs_native(self) -> bool {
         self != Engine::Liggghts
     }
