@@ -12,6 +12,7 @@ use crate::profile::{is_sample, profiles, schedule, ProfileSample, VelocityProfi
 use crate::report::progress::Progress;
 use crate::report::vtk;
 use crate::series::Series;
+use crate::solver::shear::plate::{plate_triangles, Plate, Side};
 use crate::solver::shear::{PlateRecord, ShearSim};
 use crate::spec::shear::ShearCase;
 use std::path::Path;
@@ -264,6 +265,10 @@ pub fn run_native(
         if first_stage == 0 && sim.step == 0 {
             sim.setup(0.0)?;
             rows.push(rec(&sim));
+            // the initial state, as LIGGGHTS' dump writes it at its first run's setup
+            if case.snapshot_every > 0 {
+                vtk::write_snapshot(&out.join("vtk"), &sim.snapshot(), case.dt)?;
+            }
         }
         for (k, &end) in ends.iter().enumerate().skip(first_stage) {
             // a stage starts with its setup; a run resumed inside the stage is past it
@@ -294,10 +299,7 @@ pub fn run_native(
                     });
                 }
                 if case.snapshot_every > 0 && sim.step.is_multiple_of(case.snapshot_every) {
-                    vtk::write_snapshot(
-                        &out.join("vtk").join(format!("native_{:09}.vtk", sim.step)),
-                        &sim.snapshot(),
-                    )?;
+                    vtk::write_snapshot(&out.join("vtk"), &sim.snapshot(), case.dt)?;
                 }
                 if let Checkpointing::Every(every) = checkpointing {
                     if output && last_checkpoint.elapsed() >= every && sim.step < end {
@@ -553,7 +555,22 @@ pub fn run_liggghts(
         });
     }
     if case.snapshot_every > 0 {
-        vtk::convert_liggghts_snapshots(&dir, SNAPSHOT_PREFIX, &out.join("vtk"))?;
+        // the plates where LIGGGHTS had them: the top at its thermo row's height, the bottom
+        // moved along x by the stages' displacement
+        let plates = |step: u64| {
+            let top_y = rows.iter().find(|r| r.step == step)?.top_y;
+            let d = displacement(case, step);
+            let bottom = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
+            let top = Plate::new(Side::Top, top_y, &case.plates, case.box_x);
+            let mut b = plate_triangles(&bottom, case.box_z);
+            for t in &mut b {
+                for n in t.iter_mut() {
+                    n[0] += d;
+                }
+            }
+            Some([b, plate_triangles(&top, case.box_z)])
+        };
+        vtk::convert_liggghts_snapshots(&dir, SNAPSHOT_PREFIX, &out.join("vtk"), case.dt, plates)?;
     }
     let samples = read_profile_dumps(case, &dir, &rows, packing.radius.len())?;
     let mut resumed_from: Vec<u64> = state.earlier.iter().skip(1).map(|p| p.1).collect();

@@ -10,6 +10,7 @@ missing=()
 command -v liggghts >/dev/null 2>&1 || missing+=(liggghts libliggghts-dev)
 command -v chromium >/dev/null 2>&1 || missing+=(chromium)
 # a local SLURM for the sweep's scheduler test (tools/slurm-local.sh starts it; needs root)
+/usr/bin/python3 -c "import vtkmodules" >/dev/null 2>&1 || missing+=(python3-vtk9)  # tests read the ParaView files
 command -v slurmctld >/dev/null 2>&1 || missing+=(slurmctld slurmd slurm-client munge)
 if [ "${#missing[@]}" -gt 0 ]; then
   $SUDO apt-get update

@@ -1,6 +1,13 @@
-//! Particle snapshots as legacy VTK polydata (ParaView reads them; render as spheres with a
-//! Glyph filter scaled by `radius`). Fields: radius, velocity, angular velocity and, for the
-//! native solver, the accumulated rotation (the paper's rotation colour maps).
+//! Particle snapshots for ParaView: VTK XML unstructured grids (`.vtu`, binary, appended raw
+//! data, little endian, UInt64 block headers), one file of particles (one vertex cell each)
+//! and one of the two plates (their triangles) per snapshot, tied by a `.pvd` collection
+//! whose `timestep` is the physical time [s]. Open `native.pvd` (or `liggghts.pvd`) and render
+//! the particles as spheres with a Glyph filter scaled by `radius`, coloured by
+//! `rotation_magnitude` for the paper's rotation maps (Figs 8-11).
+//!
+//! Fields: particle `id` (1-based, LIGGGHTS' atom id), `radius`, `velocity`, `omega` and, for
+//! the native solver, the accumulated `rotation` vector and its magnitude (LIGGGHTS' dumps do
+//! not integrate rotations). Plates: a cell field `plate` (0 bottom, 1 top).
 
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
@@ -8,72 +15,218 @@ use crate::solver::shear::Snapshot;
 use std::fmt::Write;
 use std::path::Path;
 
-/// Writes one snapshot.
-pub fn write_snapshot(path: &Path, s: &Snapshot) -> Result<()> {
+/// One array of a dataset.
+pub enum Field<'a> {
+    I64(&'a [i64]),
+    F64(&'a [f64]),
+    V3(&'a [[f64; 3]]),
+}
+
+impl Field<'_> {
+    fn vtk_type(&self) -> &'static str {
+        match self {
+            Field::I64(_) => "Int64",
+            _ => "Float64",
+        }
+    }
+    fn components(&self) -> usize {
+        match self {
+            Field::V3(_) => 3,
+            _ => 1,
+        }
+    }
+    fn bytes(&self) -> Vec<u8> {
+        match self {
+            Field::I64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Field::F64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Field::V3(v) => v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect(),
+        }
+    }
+}
+
+/// The cells of a dataset: one vertex per point, or consecutive point triples as triangles.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub enum Cells {
+    Vertices,
+    Triangles,
+}
+
+/// A `.vtu` document: `points`, their cells, point and cell arrays, and the physical time as
+/// the field `TimeValue`.
+pub fn vtu(
+    points: &[[f64; 3]],
+    cells: Cells,
+    point_data: &[(&str, Field)],
+    cell_data: &[(&str, Field)],
+    time: f64,
+) -> Vec<u8> {
+    let n = points.len();
+    let (ncell, per, vtk_type) = match cells {
+        Cells::Vertices => (n, 1, 1u8),
+        Cells::Triangles => (n / 3, 3, 5u8),
+    };
+    let connectivity: Vec<i64> = (0..(ncell * per) as i64).collect();
+    let offsets: Vec<i64> = (1..=ncell as i64).map(|k| k * per as i64).collect();
+    let types = vec![vtk_type; ncell];
+    let mut blocks: Vec<Vec<u8>> = Vec::new();
+    let mut xml = String::new();
+    let mut offset = 0usize;
+    let mut array = |xml: &mut String, name: &str, ty: &str, comps: usize, bytes: Vec<u8>| {
+        writeln!(
+            xml,
+            r#"<DataArray type="{ty}" Name="{name}" NumberOfComponents="{comps}" format="appended" offset="{offset}"/>"#
+        )
+        .unwrap();
+        offset += 8 + bytes.len();
+        blocks.push(bytes);
+    };
+    writeln!(
+        xml,
+        r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64">
+<UnstructuredGrid>
+<FieldData><DataArray type="Float64" Name="TimeValue" NumberOfTuples="1" format="ascii">{time:e}</DataArray></FieldData>
+<Piece NumberOfPoints="{n}" NumberOfCells="{ncell}">"#
+    )
+    .unwrap();
+    xml.push_str("<PointData>\n");
+    for (name, f) in point_data {
+        array(&mut xml, name, f.vtk_type(), f.components(), f.bytes());
+    }
+    xml.push_str("</PointData>\n<CellData>\n");
+    for (name, f) in cell_data {
+        array(&mut xml, name, f.vtk_type(), f.components(), f.bytes());
+    }
+    xml.push_str("</CellData>\n<Points>\n");
+    array(&mut xml, "Points", "Float64", 3, Field::V3(points).bytes());
+    xml.push_str("</Points>\n<Cells>\n");
+    array(
+        &mut xml,
+        "connectivity",
+        "Int64",
+        1,
+        Field::I64(&connectivity).bytes(),
+    );
+    array(
+        &mut xml,
+        "offsets",
+        "Int64",
+        1,
+        Field::I64(&offsets).bytes(),
+    );
+    array(&mut xml, "types", "UInt8", 1, types);
+    xml.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n<AppendedData encoding=\"raw\">\n_");
+    let mut out = xml.into_bytes();
+    for b in blocks {
+        out.extend_from_slice(&(b.len() as u64).to_le_bytes());
+        out.extend_from_slice(&b);
+    }
+    out.extend_from_slice(b"\n</AppendedData>\n</VTKFile>\n");
+    out
+}
+
+/// File names of one code's snapshot at `step`: particles and plates.
+pub fn snapshot_names(code: &str, step: u64) -> (String, String) {
+    (
+        format!("{code}_{step:09}.vtu"),
+        format!("{code}_plates_{step:09}.vtu"),
+    )
+}
+
+/// The plates' triangles as a `.vtu` (cell field `plate`: 0 bottom, 1 top).
+fn plates_vtu(plates: &[Vec<[[f64; 3]; 3]>; 2], time: f64) -> Vec<u8> {
+    let points: Vec<[f64; 3]> = plates.iter().flatten().flatten().copied().collect();
+    let which: Vec<i64> = plates
+        .iter()
+        .enumerate()
+        .flat_map(|(k, t)| std::iter::repeat_n(k as i64, t.len()))
+        .collect();
+    vtu(
+        &points,
+        Cells::Triangles,
+        &[],
+        &[("plate", Field::I64(&which))],
+        time,
+    )
+}
+
+/// Writes one native snapshot (particles and plates) into `dir` and rewrites `native.pvd`.
+pub fn write_snapshot(dir: &Path, s: &Snapshot, dt: f64) -> Result<()> {
     let rot_mag: Vec<f64> = s
         .rotation
         .iter()
         .map(|r| (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt())
         .collect();
+    let ids: Vec<i64> = (1..=s.x.len() as i64).collect();
+    let time = s.step as f64 * dt;
+    let (particles, plates) = snapshot_names("native", s.step);
     write_atomic(
-        path,
-        polydata(
-            s.step,
+        &dir.join(particles),
+        &vtu(
             &s.x,
-            &s.radius,
+            Cells::Vertices,
             &[
-                ("velocity", &s.v),
-                ("omega", &s.omega),
-                ("rotation", &s.rotation),
+                ("id", Field::I64(&ids)),
+                ("radius", Field::F64(&s.radius)),
+                ("velocity", Field::V3(&s.v)),
+                ("omega", Field::V3(&s.omega)),
+                ("rotation", Field::V3(&s.rotation)),
+                ("rotation_magnitude", Field::F64(&rot_mag)),
             ],
-            &[("rotation_magnitude", &rot_mag)],
-        )
-        .as_bytes(),
-    )
+            &[],
+            time,
+        ),
+    )?;
+    write_atomic(&dir.join(plates), &plates_vtu(&s.plates, time))?;
+    write_pvd(dir, "native", dt)
 }
 
-fn polydata(
-    step: u64,
-    x: &[[f64; 3]],
-    radius: &[f64],
-    vectors: &[(&str, &[[f64; 3]])],
-    scalars: &[(&str, &[f64])],
-) -> String {
-    let n = x.len();
-    let mut s = format!("# vtk DataFile Version 3.0\ndem-verify snapshot step {step}\nASCII\nDATASET POLYDATA\nPOINTS {n} double\n");
-    for p in x {
-        writeln!(s, "{:e} {:e} {:e}", p[0], p[1], p[2]).unwrap();
-    }
-    writeln!(s, "VERTICES {n} {}", 2 * n).unwrap();
-    for k in 0..n {
-        writeln!(s, "1 {k}").unwrap();
-    }
-    writeln!(
-        s,
-        "POINT_DATA {n}\nSCALARS radius double 1\nLOOKUP_TABLE default"
-    )
-    .unwrap();
-    for r in radius {
-        writeln!(s, "{r:e}").unwrap();
-    }
-    for (name, vals) in scalars {
-        writeln!(s, "SCALARS {name} double 1\nLOOKUP_TABLE default").unwrap();
-        for v in *vals {
-            writeln!(s, "{v:e}").unwrap();
+/// Rewrites `<code>.pvd` in `dir` from the snapshots there (so a resumed run's collection
+/// holds the snapshots written before the interruption too): particles as part 0, plates as
+/// part 1, `timestep` = step x dt [s].
+pub fn write_pvd(dir: &Path, code: &str, dt: f64) -> Result<()> {
+    let prefix = format!("{code}_");
+    let mut steps: Vec<u64> = std::fs::read_dir(dir)
+        .map_err(|e| Error::io(dir, e))?
+        .filter_map(|e| {
+            let name = e.ok()?.file_name().into_string().ok()?;
+            name.strip_prefix(&prefix)?
+                .strip_suffix(".vtu")?
+                .parse()
+                .ok()
+        })
+        .collect();
+    steps.sort_unstable();
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n<Collection>\n",
+    );
+    for step in steps {
+        let (particles, plates) = snapshot_names(code, step);
+        let t = step as f64 * dt;
+        writeln!(
+            s,
+            r#"<DataSet timestep="{t:e}" part="0" file="{particles}"/>"#
+        )
+        .unwrap();
+        if dir.join(&plates).is_file() {
+            writeln!(s, r#"<DataSet timestep="{t:e}" part="1" file="{plates}"/>"#).unwrap();
         }
     }
-    for (name, vals) in vectors {
-        writeln!(s, "VECTORS {name} double").unwrap();
-        for v in *vals {
-            writeln!(s, "{:e} {:e} {:e}", v[0], v[1], v[2]).unwrap();
-        }
-    }
-    s
+    s.push_str("</Collection>\n</VTKFile>\n");
+    write_atomic(&dir.join(format!("{code}.pvd")), s.as_bytes())
 }
 
 /// Converts LIGGGHTS `dump custom` snapshots (`id radius x y z vx vy vz omegax omegay
-/// omegaz`, files `<prefix><step>.dump` in `dir`) to VTK files `liggghts_<step>.vtk`.
-pub fn convert_liggghts_snapshots(dir: &Path, prefix: &str, out: &Path) -> Result<usize> {
+/// omegaz`, files `<prefix><step>.dump` in `dir`) to `liggghts_<step>.vtu` in `out`, with the
+/// plates `plates(step)` gives (None: no plate file for that step), and writes `liggghts.pvd`.
+pub fn convert_liggghts_snapshots(
+    dir: &Path,
+    prefix: &str,
+    out: &Path,
+    dt: f64,
+    plates: impl Fn(u64) -> Option<[Vec<[[f64; 3]; 3]>; 2]>,
+) -> Result<usize> {
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let mut n = 0;
     let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
     for e in entries {
@@ -87,7 +240,8 @@ pub fn convert_liggghts_snapshots(dir: &Path, prefix: &str, out: &Path) -> Resul
             continue;
         };
         let text = read_to_string(&p)?;
-        let (mut x, mut radius, mut v, mut w) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut ids, mut x, mut radius, mut v, mut w) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut in_atoms = false;
         for line in text.lines() {
             if line.starts_with("ITEM: ATOMS") {
@@ -107,17 +261,35 @@ pub fn convert_liggghts_snapshots(dir: &Path, prefix: &str, out: &Path) -> Resul
                     msg: format!("expected 11 columns, got {}", f.len()),
                 });
             }
+            ids.push(f[0] as i64);
             radius.push(f[1]);
             x.push([f[2], f[3], f[4]]);
             v.push([f[5], f[6], f[7]]);
             w.push([f[8], f[9], f[10]]);
         }
+        let time = step as f64 * dt;
+        let (particles, plate_file) = snapshot_names("liggghts", step);
         write_atomic(
-            &out.join(format!("liggghts_{step:09}.vtk")),
-            polydata(step, &x, &radius, &[("velocity", &v), ("omega", &w)], &[]).as_bytes(),
+            &out.join(particles),
+            &vtu(
+                &x,
+                Cells::Vertices,
+                &[
+                    ("id", Field::I64(&ids)),
+                    ("radius", Field::F64(&radius)),
+                    ("velocity", Field::V3(&v)),
+                    ("omega", Field::V3(&w)),
+                ],
+                &[],
+                time,
+            ),
         )?;
+        if let Some(pl) = plates(step) {
+            write_atomic(&out.join(plate_file), &plates_vtu(&pl, time))?;
+        }
         n += 1;
     }
+    write_pvd(out, "liggghts", dt)?;
     Ok(n)
 }
 
@@ -126,7 +298,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn snapshot_has_points_and_fields() {
+    fn snapshot_files_hold_binary_arrays_and_the_collection_the_time() {
+        let tri = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
         let s = Snapshot {
             step: 5,
             x: vec![[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]],
@@ -134,13 +307,30 @@ mod tests {
             omega: vec![[1.0, 0.0, 0.0]; 2],
             radius: vec![0.1, 0.2],
             rotation: vec![[0.0, 3.0, 4.0]; 2],
+            plates: [vec![tri], vec![tri, tri]],
         };
         let dir = tempfile::tempdir().unwrap();
-        let p = dir.path().join("a.vtk");
-        write_snapshot(&p, &s).unwrap();
-        let t = std::fs::read_to_string(p).unwrap();
-        assert!(t.contains("POINTS 2 double"));
-        assert!(t.contains("VECTORS omega double"));
-        assert!(t.contains("SCALARS rotation_magnitude double 1\nLOOKUP_TABLE default\n5e0"));
+        write_snapshot(dir.path(), &s, 1e-3).unwrap();
+        let b = std::fs::read(dir.path().join("native_000000005.vtu")).unwrap();
+        let head = String::from_utf8_lossy(&b[..b.len().min(1500)]).to_string();
+        assert!(
+            head.contains(r#"NumberOfPoints="2" NumberOfCells="2""#),
+            "{head}"
+        );
+        assert!(head.contains(r#"Name="rotation_magnitude""#));
+        // the magnitude 5 as little-endian f64 bits after its block header
+        let five = 5.0f64.to_le_bytes();
+        assert!(b.windows(8).any(|w| w == five));
+        let pl = std::fs::read(dir.path().join("native_plates_000000005.vtu")).unwrap();
+        assert!(String::from_utf8_lossy(&pl).contains(r#"NumberOfPoints="9" NumberOfCells="3""#));
+        let pvd = std::fs::read_to_string(dir.path().join("native.pvd")).unwrap();
+        assert!(
+            pvd.contains(r#"timestep="5e-3" part="0" file="native_000000005.vtu""#),
+            "{pvd}"
+        );
+        assert!(
+            pvd.contains(r#"part="1" file="native_plates_000000005.vtu""#),
+            "{pvd}"
+        );
     }
 }

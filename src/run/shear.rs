@@ -528,6 +528,16 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         case0.kappa(),
         out.display()
     );
+    if case0.snapshot_every > 0 {
+        say!(
+            "  particle snapshots for ParaView every {} steps ({:.3e} s): {}",
+            case0.snapshot_every,
+            case0.snapshot_every as f64 * case0.dt,
+            out.join("seed*/vtk/{native,liggghts}.pvd").display()
+        );
+    } else {
+        say!("  no particle snapshots (--snapshot-every N writes them)");
+    }
     let deviations = crate::spec::paper_table::deviations(case0);
     say!("  differs from the paper's Tables 1-2 in:");
     for d in &deviations {

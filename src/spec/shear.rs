@@ -300,7 +300,8 @@ impl ShearCase {
                 },
             ],
             output_every: 1000,
-            snapshot_every: 0,
+            // 36 snapshots over the three stages: the paper's rotation maps
+            snapshot_every: 100_000,
         };
         match preset {
             Preset::Paper => {}
@@ -322,7 +323,7 @@ impl ShearCase {
                     strain: 1.0,
                 }];
                 c.output_every = 100;
-                c.snapshot_every = 0;
+                c.snapshot_every = 10_000;
             }
         }
         Ok(c)

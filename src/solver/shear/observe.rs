@@ -37,6 +37,8 @@ pub struct Snapshot {
     pub radius: Vec<f64>,
     /// Accumulated rotation vector, integral of omega dt [rad].
     pub rotation: Vec<[f64; 3]>,
+    /// The bottom and top plates' triangles where the meshes are now.
+    pub plates: [Vec<[[f64; 3]; 3]>; 2],
 }
 
 impl ShearSim {
@@ -88,6 +90,7 @@ impl ShearSim {
             omega: self.omega.clone(),
             radius: self.radius.clone(),
             rotation: self.rotation.clone(),
+            plates: [0, 1].map(|k| self.meshes[k].tris.iter().map(|t| t.nodes).collect()),
         }
     }
 
