@@ -3,7 +3,9 @@
 
 use clap::Parser;
 use dem_verify::cli::{run, Cli};
-use dem_verify::run::Verdict;
+use dem_verify::run::{summary_written, Verdict};
+use std::io::Write;
+use std::os::fd::FromRawFd;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
@@ -15,21 +17,51 @@ fn main() -> ExitCode {
     }
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
+    let cli = Cli::parse();
+    // --json: stdout holds one JSON document; every line the command prints goes to stderr
+    // (file descriptor 1 pointed at stderr, the real stdout kept for the document)
+    let json_out = cli.json.then(|| {
+        // SAFETY: plain descriptor duplication before any thread exists; both descriptors
+        // are valid for the whole process
+        unsafe {
+            let saved = libc::dup(1);
+            libc::dup2(2, 1);
+            std::fs::File::from_raw_fd(saved)
+        }
+    });
     // every comparing command ends with one verdict line (stdout), errors with one `error:`
     // line (stderr)
-    match run(Cli::parse()) {
+    let outcome = run(cli);
+    let (code, word, error) = match &outcome {
         Ok(Verdict::Agree) => {
             println!("verdict: agree");
-            ExitCode::SUCCESS
+            (0, "agree", None)
         }
         Ok(Verdict::Disagree) => {
             println!("verdict: DISAGREE");
-            ExitCode::from(1)
+            (1, "disagree", None)
         }
-        Ok(Verdict::Done) => ExitCode::SUCCESS,
+        Ok(Verdict::Done) => (0, "done", None),
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(2)
+            (2, "error", Some(e.to_string()))
         }
+    };
+    if let Some(mut out) = json_out {
+        let _ = std::io::stdout().flush();
+        let file = summary_written();
+        let summary = file
+            .as_ref()
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok());
+        let doc = serde_json::json!({
+            "verdict": word,
+            "exit_code": code,
+            "error": error,
+            "summary_file": file,
+            "summary": summary,
+        });
+        let _ = writeln!(out, "{doc}");
     }
+    ExitCode::from(code)
 }

@@ -117,6 +117,39 @@ fn reference_mode_needs_no_liggghts() {
     assert_eq!(stdout.lines().last(), Some("verdict: agree"), "{stdout}");
 }
 
+/// `--json`: stdout is one JSON document (verdict, exit code, the summary the command wrote);
+/// the human lines go to stderr. An error is a document too.
+#[test]
+fn json_puts_one_document_on_stdout() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = verify(&[
+        "contact",
+        "--case",
+        "rolling_unload",
+        "--reference",
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(doc["verdict"], "agree");
+    assert_eq!(doc["exit_code"], 0);
+    assert_eq!(doc["summary"]["pass"], true, "{doc}");
+    assert!(!doc["summary"]["results"].as_array().unwrap().is_empty());
+    assert_eq!(
+        doc["summary_file"].as_str().map(Path::new),
+        Some(out.join("summary.json").as_path())
+    );
+    assert!(stderr(&o).contains("verdict: agree"));
+    let o = verify(&["shear", "--mu-r", "nan", "--json"]);
+    assert_eq!(o.status.code(), Some(2));
+    let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(doc["verdict"], "error");
+    assert!(doc["error"].as_str().unwrap().contains("--mu-r"), "{doc}");
+}
+
 /// Copies the stored reference of `rolling_elastic__epsd` into `refdir`, its CSV lines edited
 /// by `edit`; with `reseal` the provenance gets the edited file's row count and checksum (as
 /// if it had been stored so), else it keeps the original's.

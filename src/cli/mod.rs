@@ -130,6 +130,10 @@ impl LiggghtsArgs {
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// Print one JSON document on stdout at the end (verdict, exit code, error, and the
+    /// summary file the command wrote, parsed); everything else goes to stderr.
+    #[arg(long, global = true)]
+    pub json: bool,
 }
 
 #[derive(Subcommand, Debug)]

@@ -640,6 +640,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         &dir.join("report.json"),
         serde_json::to_string_pretty(&rep)?.as_bytes(),
     )?;
+    crate::run::note_summary(&dir.join("report.json"));
     for (code, cs) in rep.conclusions.iter().chain(&rep.converged_conclusions) {
         for c in cs {
             println!("  {code}: {} -> {} ({})", c.claim, c.verdict, c.evidence);

@@ -362,6 +362,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         &out.join("bench.json"),
         serde_json::to_string_pretty(&report)?.as_bytes(),
     )?;
+    super::note_summary(&out.join("bench.json"));
     println!("bench.json: {}", out.join("bench.json").display());
     Ok(report)
 }

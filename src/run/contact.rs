@@ -105,6 +105,7 @@ pub fn run_all(
     let summary = ContactSummary::new(against, version, req.rtol, all, errors);
     let path = out.join("summary.json");
     summary.write(&path)?;
+    super::note_summary(&path);
     if !summary.errors.is_empty() {
         let list: Vec<String> = summary
             .errors

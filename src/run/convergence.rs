@@ -342,6 +342,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    super::note_summary(&out.join("summary.json"));
     println!(
         "  plots: {} and erot_dt.svg; summary: {}",
         out.join("mu_dt.svg").display(),

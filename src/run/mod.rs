@@ -26,6 +26,19 @@ use std::time::Duration;
 /// layer; readers refuse other versions.
 pub const SCHEMA: u32 = 2;
 
+/// The summary file the running command wrote last (what `--json` prints).
+static SUMMARY: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
+
+/// Records that a command wrote its summary (summary.json, bench.json, a sweep's report.json).
+pub fn note_summary(path: &Path) {
+    *SUMMARY.lock().unwrap_or_else(|e| e.into_inner()) = Some(path.to_path_buf());
+}
+
+/// The summary file noted last, if any.
+pub fn summary_written() -> Option<PathBuf> {
+    SUMMARY.lock().unwrap_or_else(|e| e.into_inner()).clone()
+}
+
 /// What a study concluded (a command's exit status: 0 agree, 1 disagree).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

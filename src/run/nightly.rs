@@ -134,6 +134,7 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
         &a.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    super::note_summary(&a.out.join("summary.json"));
     let all = history::append(&history_path, &records(&summary, start, &a.out))?;
     let html = crate::report::nightly::report(&summary, &all, &a.out)?;
     write_atomic(&a.out.join("report.html"), html.as_bytes())?;

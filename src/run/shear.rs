@@ -799,6 +799,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         &out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    super::note_summary(&out.join("summary.json"));
     Ok(summary)
 }
 

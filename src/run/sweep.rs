@@ -363,6 +363,7 @@ pub fn collect_dir(dir: &Path) -> Result<(Vec<RunResult>, usize)> {
         &dir.join("results.json"),
         serde_json::to_string_pretty(&results)?.as_bytes(),
     )?;
+    super::note_summary(&dir.join("results.json"));
     write_atomic(&dir.join("results.csv"), results_csv(&results).as_bytes())?;
     if !missing.is_empty() {
         return Err(Error::Cases(format!(

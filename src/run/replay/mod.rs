@@ -275,6 +275,7 @@ pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Resu
     };
     let json = serde_json::to_string_pretty(&outcome)?;
     write_atomic(&req.out.join("summary.json"), json.as_bytes())?;
+    crate::run::note_summary(&req.out.join("summary.json"));
     plot(&req.out, &outcome)?;
     Ok(outcome)
 }
