@@ -265,6 +265,7 @@ fn generated_shear_arguments_are_refused_by_option_or_start() {
                 }
                 Ok(Cli {
                     command: Command::Shear(a),
+                    ..
                 }) => a,
                 Ok(_) => unreachable!("a shear command line"),
             };
