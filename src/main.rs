@@ -1,8 +1,9 @@
 //! `verify`: parses the command line and maps the outcome to an exit code
 //! (0 agree, 1 disagree, 2 error).
 
-use clap::Parser;
-use dem_verify::cli::{run, Cli};
+use clap::CommandFactory;
+use dem_verify::cli::study::execute;
+use dem_verify::cli::Cli;
 use dem_verify::run::{summary_written, Verdict};
 use std::io::Write;
 use std::os::fd::FromRawFd;
@@ -17,10 +18,10 @@ fn main() -> ExitCode {
     }
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
-    let cli = Cli::parse();
+    let matches = Cli::command().get_matches();
     // --json: stdout holds one JSON document; every line the command prints goes to stderr
     // (file descriptor 1 pointed at stderr, the real stdout kept for the document)
-    let json_out = cli.json.then(|| {
+    let json_out = matches.get_flag("json").then(|| {
         // SAFETY: plain descriptor duplication before any thread exists; both descriptors
         // are valid for the whole process
         unsafe {
@@ -31,7 +32,7 @@ fn main() -> ExitCode {
     });
     // every comparing command ends with one verdict line (stdout), errors with one `error:`
     // line (stderr)
-    let outcome = run(cli);
+    let outcome = execute(&matches);
     let (code, word, error) = match &outcome {
         Ok(Verdict::Agree) => {
             println!("verdict: agree");

@@ -150,6 +150,94 @@ fn json_puts_one_document_on_stdout() {
     assert!(doc["error"].as_str().unwrap().contains("--mu-r"), "{doc}");
 }
 
+/// Study files: a run writes its resolved study beside its summary; `verify run` on it
+/// repeats the run (finished parts reused), prints a plan first, overrides fields with flags
+/// after `--`, stops after the plan with --dry-run, and refuses unknown fields by name. Every
+/// study shipped in studies/ parses and plans.
+#[test]
+fn studies_round_trip_plan_and_refuse_unknown_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = verify(&[
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.05",
+        "--native-only",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let study = out.join("study.toml");
+    let text = std::fs::read_to_string(&study).unwrap();
+    for line in [
+        "command = \"shear\"",
+        "preset = \"ci\"",
+        "strain = 0.05",
+        "native_only = true",
+    ] {
+        assert!(text.contains(line), "{line}: {text}");
+    }
+    let o = verify(&["run", study.to_str().unwrap()]);
+    let t = String::from_utf8_lossy(&o.stdout).to_string();
+    assert_eq!(o.status.code(), Some(0), "{t}{}", stderr(&o));
+    assert!(
+        t.contains("plan (verify shear): 1 run(s), 16141 steps"),
+        "{t}"
+    );
+    assert!(t.contains("native result found, reused"), "{t}");
+    // a field overridden, the plan only: nothing runs
+    let other = dir.path().join("other");
+    let o = verify(&[
+        "run",
+        study.to_str().unwrap(),
+        "--dry-run",
+        "--",
+        "--seeds",
+        "2",
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    let t = String::from_utf8_lossy(&o.stdout).to_string();
+    assert_eq!(o.status.code(), Some(0), "{t}{}", stderr(&o));
+    assert!(
+        t.contains("plan (verify shear): 2 run(s), 32282 steps"),
+        "{t}"
+    );
+    assert!(!other.exists(), "--dry-run ran something");
+    for (body, expect) in [
+        (
+            "version = 1\ncommand = \"shear\"\n[options]\nmu_rr = 0.5\n",
+            "[options] mu_rr",
+        ),
+        (
+            "version = 1\ncommand = \"shear\"\n[options]\nmu_r = \"abc\"\n",
+            "--mu-r",
+        ),
+        ("version = 2\ncommand = \"shear\"\n", "version"),
+        ("version = 1\ncommand = \"shell\"\n", "command"),
+    ] {
+        let bad = dir.path().join("bad.toml");
+        std::fs::write(&bad, body).unwrap();
+        let o = verify(&["run", bad.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{body}");
+        assert!(stderr(&o).contains(expect), "{body}: {}", stderr(&o));
+    }
+    let studies = Path::new(env!("CARGO_MANIFEST_DIR")).join("studies");
+    let mut n = 0;
+    for e in std::fs::read_dir(&studies).unwrap() {
+        let p = e.unwrap().path();
+        let o = verify(&["run", p.to_str().unwrap(), "--dry-run"]);
+        assert_eq!(o.status.code(), Some(0), "{}: {}", p.display(), stderr(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("plan"));
+        n += 1;
+    }
+    assert!(n >= 6, "studies/ holds {n} studies");
+}
+
 /// Copies the stored reference of `rolling_elastic__epsd` into `refdir`, its CSV lines edited
 /// by `edit`; with `reseal` the provenance gets the edited file's row count and checksum (as
 /// if it had been stored so), else it keeps the original's.

@@ -6,6 +6,7 @@ pub mod convergence;
 pub mod nightly;
 pub mod replay;
 pub mod shear;
+pub mod study;
 pub mod sweep;
 
 use crate::compare::CONTACT_RTOL;
@@ -192,6 +193,14 @@ pub enum Command {
     },
     /// Print the manual page (roff), e.g. `verify man > verify.1 && man ./verify.1`.
     Man,
+    /// Runs a study file (a command's options as TOML; see studies/): prints its plan
+    /// (runs, steps, core-hours, disk), then runs it; flags after `--` override its fields.
+    #[command(after_help = "Examples:\n  \
+        verify run studies/fast-map.toml --dry-run      # the plan only\n  \
+        verify run runs/shear-x/study.toml              # repeat a run (finished parts reused)\n  \
+        verify run studies/paper.toml -- --jobs 2       # a field overridden\n\n\
+        Exit status: the command's (0 agree, 1 disagree, 2 error).")]
+    Run(study::RunArgs),
 }
 
 #[derive(Args, Debug)]
@@ -238,6 +247,7 @@ pub fn run(cli: Cli) -> Result<Verdict> {
         Command::Nightly(a) => nightly::nightly(a),
         Command::Sweep(a) => sweep::sweep(a),
         Command::Convergence(a) => convergence::convergence(a),
+        Command::Run(a) => study::run_study(a),
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());

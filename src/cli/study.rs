@@ -1,0 +1,398 @@
+//! Study files: a command line as TOML, and back.
+//!
+//! ```toml
+//! version = 1
+//! command = "shear"          # shear, convergence, sweep, nightly, bench, contact
+//! [options]                  # the command's long options, `-` written `_`
+//! mu_r = 0.5
+//! eta_r = 0.5
+//! preset = "fast"
+//! native_only = true         # a flag: true or false
+//! speeds = [0.002, 0.006, 0.02]
+//! ```
+//!
+//! `verify run STUDY.toml [--dry-run] [-- FLAGS...]` turns the file into the command's
+//! arguments (flags after the file override its fields) and parses them with the same
+//! definitions as the command line, so a study is validated exactly as the flags are. Every
+//! command that writes a summary also writes `study.toml` beside it: the resolved options,
+//! defaults included, so `verify run DIR/study.toml` repeats the run (in the same directory:
+//! finished parts are reused). Before it starts, a study prints its plan (runs, steps,
+//! estimated core-hours and disk); `--dry-run` prints only that.
+
+use super::{Cli, Command};
+use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
+use crate::run::{Engine, Verdict};
+use crate::solver::shear::pairs::KernelPath;
+use crate::spec::shear::{CaseRequest, Overrides, ShearCase};
+use clap::{ArgAction, ArgMatches, Args, CommandFactory, FromArgMatches};
+use std::path::{Path, PathBuf};
+
+/// Version of the study format.
+pub const STUDY_VERSION: i64 = 1;
+
+/// Commands a study can hold.
+const STUDY_COMMANDS: [&str; 6] = [
+    "shear",
+    "convergence",
+    "sweep",
+    "nightly",
+    "bench",
+    "contact",
+];
+
+/// `verify run`.
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// The study file (TOML: version, command, [options])
+    pub study: PathBuf,
+    /// Print the plan (runs, steps, estimated core-hours and disk) and stop
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Options that override the study's fields, as on the command line (after `--`)
+    #[arg(last = true, allow_hyphen_values = true)]
+    pub overrides: Vec<String>,
+}
+
+/// The resolved options of a parsed study-able command (defaults included), as a study file;
+/// None for other commands (and for `sweep` with a subcommand).
+pub fn resolve(matches: &ArgMatches) -> Option<String> {
+    let (name, sub) = matches.subcommand()?;
+    if !STUDY_COMMANDS.contains(&name) || sub.subcommand().is_some() {
+        return None;
+    }
+    let root = Cli::command();
+    let cmd = root.find_subcommand(name)?;
+    let mut options = toml::Table::new();
+    for arg in cmd.get_arguments() {
+        let id = arg.get_id().as_str();
+        let Some(long) = arg.get_long() else {
+            continue;
+        };
+        if matches!(id, "help" | "version" | "json") {
+            continue;
+        }
+        let key = long.replace('-', "_");
+        if matches!(arg.get_action(), ArgAction::SetTrue) {
+            options.insert(key, toml::Value::Boolean(sub.get_flag(id)));
+            continue;
+        }
+        let Ok(Some(raw)) = sub.try_get_raw(id) else {
+            continue;
+        };
+        let vals: Vec<toml::Value> = raw.map(|v| toml_value(&v.to_string_lossy())).collect();
+        let multiple = arg.get_value_delimiter().is_some() || vals.len() > 1;
+        options.insert(
+            key,
+            if multiple {
+                toml::Value::Array(vals)
+            } else {
+                vals.into_iter().next()?
+            },
+        );
+    }
+    let mut doc = toml::Table::new();
+    doc.insert("version".into(), toml::Value::Integer(STUDY_VERSION));
+    doc.insert("command".into(), toml::Value::String(name.into()));
+    doc.insert("options".into(), toml::Value::Table(options));
+    Some(format!(
+        "# dem-verify study: `verify run study.toml` repeats this run (finished parts are reused)\n{}",
+        toml::to_string(&doc).ok()?
+    ))
+}
+
+/// A raw option value as TOML: a number when it reads as one, else a string.
+fn toml_value(s: &str) -> toml::Value {
+    if let Ok(i) = s.parse::<i64>() {
+        toml::Value::Integer(i)
+    } else if let Some(f) = s.parse::<f64>().ok().filter(|f| f.is_finite()) {
+        toml::Value::Float(f)
+    } else {
+        toml::Value::String(s.into())
+    }
+}
+
+fn scalar(key: &str, v: &toml::Value) -> Result<String> {
+    match v {
+        toml::Value::Integer(i) => Ok(i.to_string()),
+        toml::Value::Float(f) => Ok(format!("{f:?}")),
+        toml::Value::String(s) => Ok(s.clone()),
+        other => Err(Error::invalid(
+            format!("study option `{key}`"),
+            other,
+            "a number, a string, true/false, or an array of numbers or strings",
+        )),
+    }
+}
+
+/// The command line a study describes: `[command, --opt=value, ...]`, then `overrides`
+/// (which replace the study's fields of the same names).
+pub fn study_args(path: &Path, overrides: &[String]) -> Result<Vec<String>> {
+    let text = crate::fsutil::read_to_string(path)?;
+    let doc: toml::Table = toml::from_str(&text).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        msg: e.to_string(),
+    })?;
+    match doc.get("version") {
+        Some(toml::Value::Integer(STUDY_VERSION)) => {}
+        other => {
+            return Err(Error::invalid(
+                "study field `version`",
+                other.map_or("(missing)".into(), |v| v.to_string()),
+                STUDY_VERSION.to_string(),
+            ))
+        }
+    }
+    let command = match doc.get("command") {
+        Some(toml::Value::String(c)) if STUDY_COMMANDS.contains(&c.as_str()) => c.clone(),
+        other => {
+            return Err(Error::invalid(
+                "study field `command`",
+                other.map_or("(missing)".into(), |v| v.to_string()),
+                STUDY_COMMANDS.join(", "),
+            ))
+        }
+    };
+    for key in doc.keys() {
+        if !matches!(key.as_str(), "version" | "command" | "options") {
+            return Err(Error::invalid(
+                "study field",
+                key,
+                "version, command, options",
+            ));
+        }
+    }
+    let empty = toml::Table::new();
+    let options = match doc.get("options") {
+        Some(toml::Value::Table(t)) => t,
+        None => &empty,
+        Some(other) => return Err(Error::invalid("study field `options`", other, "a table")),
+    };
+    let root = Cli::command();
+    let cmd = root
+        .find_subcommand(&command)
+        .expect("a study command is a subcommand");
+    let valid: Vec<String> = cmd
+        .get_arguments()
+        .filter_map(|a| a.get_long())
+        .filter(|l| !matches!(*l, "help" | "json"))
+        .map(|l| l.replace('-', "_"))
+        .collect();
+    let overridden: Vec<String> = overrides
+        .iter()
+        .filter_map(|o| o.strip_prefix("--"))
+        .map(|o| o.split('=').next().unwrap_or(o).replace('-', "_"))
+        .collect();
+    let mut args = vec![command.clone()];
+    for (key, v) in options {
+        if !valid.contains(key) {
+            return Err(Error::invalid(
+                format!("[options] {key}"),
+                format!("not an option of verify {command}"),
+                valid.join(", "),
+            ));
+        }
+        if overridden.contains(key) {
+            continue;
+        }
+        let flag = format!("--{}", key.replace('_', "-"));
+        match v {
+            toml::Value::Boolean(true) => args.push(flag),
+            toml::Value::Boolean(false) => {}
+            toml::Value::Array(items) => {
+                let parts: Vec<String> = items
+                    .iter()
+                    .map(|x| scalar(key, x))
+                    .collect::<Result<_>>()?;
+                args.push(format!("{flag}={}", parts.join(",")));
+            }
+            other => args.push(format!("{flag}={}", scalar(key, other)?)),
+        }
+    }
+    args.extend(overrides.iter().cloned());
+    Ok(args)
+}
+
+/// Particle-steps per second per core measured by `verify bench` on the reference machine
+/// (2026-12-02, fast state, 2,500 particles): native with AVX-512 5.60e6, scalar 2.56e6,
+/// LIGGGHTS 2.48e6. A plan's core-hours are these rates applied to its steps.
+fn rate(code: Engine) -> f64 {
+    match code {
+        Engine::Liggghts => 2.48e6,
+        _ => match KernelPath::detect() {
+            KernelPath::Avx512 => 5.60e6,
+            KernelPath::Scalar => 2.56e6,
+        },
+    }
+}
+
+/// Runs, steps and the estimated cost of a list of (code, case) runs.
+struct Plan {
+    runs: usize,
+    steps: u64,
+    core_hours: f64,
+    disk_bytes: f64,
+}
+
+impl Plan {
+    fn of(runs: &[(Engine, ShearCase)]) -> Plan {
+        let mut p = Plan {
+            runs: runs.len(),
+            steps: 0,
+            core_hours: 0.0,
+            disk_bytes: 0.0,
+        };
+        for (code, c) in runs {
+            let steps = c.total_steps();
+            p.steps += steps;
+            p.core_hours += steps as f64 * c.particles as f64 / rate(*code) / 3600.0;
+            // series rows (~300 B), snapshots (~100 B per particle; LIGGGHTS also its text
+            // dump, ~200 B), checkpoints (~600 B per particle)
+            let snaps = steps
+                .checked_div(c.snapshot_every)
+                .map_or(0.0, |n| (n + 1) as f64);
+            let per_particle = if *code == Engine::Liggghts {
+                300.0
+            } else {
+                100.0
+            };
+            p.disk_bytes += (steps / c.output_every.max(1)) as f64 * 300.0
+                + snaps * c.particles as f64 * per_particle
+                + 600.0 * c.particles as f64;
+        }
+        p
+    }
+
+    fn print(&self, what: &str, cores: usize) {
+        println!(
+            "plan ({what}): {} run(s), {} steps in all, about {:.2} core-hours ({:.2} h on {cores} core(s)), {:.0} MB on disk",
+            self.runs,
+            self.steps,
+            self.core_hours,
+            self.core_hours / cores.max(1) as f64,
+            self.disk_bytes / 1e6
+        );
+        println!(
+            "  (rates of `verify bench` on the reference machine's dense state: native {:.2e}, LIGGGHTS {:.2e} \
+             particle-steps/s per core; whole fast-preset runs took 1.1-2x this with two jobs sharing 2 cores)",
+            rate(Engine::Native),
+            rate(Engine::Liggghts)
+        );
+    }
+}
+
+fn codes(e: Engine) -> Vec<Engine> {
+    match e {
+        Engine::Both => vec![Engine::Liggghts, Engine::Native],
+        e => vec![e],
+    }
+}
+
+/// The plan of a parsed study command; None for commands without one (nightly, bench, contact).
+fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
+    Ok(match &cli.command {
+        Command::Shear(a) => {
+            let req = a.request(a.engine(), "shear");
+            let mut runs = Vec::new();
+            for s in req.seed_range() {
+                let (c, _) = req.seed_case(s)?;
+                for code in codes(req.engine) {
+                    runs.push((code, c.clone()));
+                }
+            }
+            Some((Plan::of(&runs), "verify shear".into()))
+        }
+        Command::Convergence(a) => {
+            let req = a.case.request(a.engine.into(), "convergence");
+            let mut runs = Vec::new();
+            for s in req.seed_range() {
+                let (c, _) = req.seed_case(s)?;
+                for &f in &a.dt_factors {
+                    let cf = c.clone().scale_dt("--dt-factors", f)?;
+                    for code in codes(req.engine) {
+                        let lig_ok = a
+                            .liggghts_dt_factors
+                            .as_ref()
+                            .is_none_or(|l| l.contains(&f));
+                        if code != Engine::Liggghts || lig_ok {
+                            runs.push((code, cf.clone()));
+                        }
+                    }
+                }
+                if a.with_implicit {
+                    runs.push((Engine::Native, c.clone()));
+                }
+            }
+            Some((Plan::of(&runs), "verify convergence".into()))
+        }
+        Command::Sweep(a) if a.action.is_none() => {
+            let p = &a.plan;
+            let mut runs = Vec::new();
+            for &mu_r in &p.mu_r {
+                for &eta_r in &p.eta_r {
+                    for seed in 1..=p.seeds {
+                        let (c, _) = ShearCase::build(&CaseRequest {
+                            preset: p.preset.into(),
+                            rolling: p.rolling.into(),
+                            mu_r,
+                            eta_r,
+                            seed,
+                            protocol: (&p.protocol).into(),
+                            overrides: Overrides::default(),
+                            allow_inertial: false,
+                        })?;
+                        for code in codes(p.engine.into()) {
+                            runs.push((code, c.clone()));
+                        }
+                    }
+                }
+            }
+            Some((Plan::of(&runs), "verify sweep".into()))
+        }
+        _ => None,
+    })
+}
+
+/// `verify run STUDY.toml`: prints the plan, then (unless --dry-run) runs the command.
+pub fn run_study(a: RunArgs) -> Result<Verdict> {
+    let args = study_args(&a.study, &a.overrides)?;
+    println!("study {}: verify {}", a.study.display(), args.join(" "));
+    // clap's own message, first line, names the option (`--mu-r`: the field mu_r)
+    let clap_err = |e: clap::Error| {
+        let text = e.to_string();
+        let first = text
+            .lines()
+            .next()
+            .unwrap_or("")
+            .trim_start_matches("error: ");
+        Error::invalid("study", a.study.display(), first.to_string())
+    };
+    let matches = Cli::command()
+        .try_get_matches_from(std::iter::once("verify".to_string()).chain(args))
+        .map_err(clap_err)?;
+    let cli = Cli::from_arg_matches(&matches).map_err(clap_err)?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    match plan(&cli)? {
+        Some((p, what)) => p.print(&what, cores),
+        None => println!("plan: no estimate for this command"),
+    }
+    if a.dry_run {
+        return Ok(Verdict::Done);
+    }
+    execute(&matches)
+}
+
+/// Runs parsed command-line matches; a command that wrote a summary also gets its resolved
+/// study, `study.toml`, beside it.
+pub fn execute(matches: &ArgMatches) -> Result<Verdict> {
+    let cli = Cli::from_arg_matches(matches)
+        .map_err(|e| Error::invalid("command line", "", e.to_string()))?;
+    let study = resolve(matches);
+    let verdict = super::run(cli);
+    if let (Some(study), Some(summary)) = (study, crate::run::summary_written()) {
+        if let Some(dir) = summary.parent() {
+            write_atomic(&dir.join("study.toml"), study.as_bytes())?;
+        }
+    }
+    verdict
+}
