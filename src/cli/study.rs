@@ -327,9 +327,15 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
         }
         Command::Sweep(a) if a.action.is_none() => {
             let p = &a.plan;
+            let points: Vec<(f64, f64)> = p.points.clone().unwrap_or_else(|| {
+                p.mu_r
+                    .iter()
+                    .flat_map(|&m| p.eta_r.iter().map(move |&e| (m, e)))
+                    .collect()
+            });
             let mut runs = Vec::new();
-            for &mu_r in &p.mu_r {
-                for &eta_r in &p.eta_r {
+            for &(mu_r, eta_r) in &points {
+                {
                     for seed in 1..=p.seeds {
                         let (c, _) = ShearCase::build(&CaseRequest {
                             preset: p.preset.into(),

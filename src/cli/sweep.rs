@@ -60,6 +60,10 @@ pub struct PlanArgs {
     /// Rolling viscous damping coefficients, comma separated.
     #[arg(long, value_delimiter = ',', default_values_t = [0.0, 0.25, 0.5, 0.75])]
     pub eta_r: Vec<f64>,
+    /// (mu_r, eta_r) points instead of the grid --mu-r x --eta-r, each `mu_r:eta_r`, comma
+    /// separated (e.g. `0.5:0.5,0.5:0,1:0.5`).
+    #[arg(long, value_delimiter = ',', value_parser = point, conflicts_with_all = ["mu_r", "eta_r"])]
+    pub points: Option<Vec<(f64, f64)>>,
     /// Seeds per point.
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
@@ -93,6 +97,16 @@ pub struct PlanArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Scheduler {
     Slurm,
+}
+
+/// `--points`: one `mu_r:eta_r` pair.
+fn point(s: &str) -> std::result::Result<(f64, f64), String> {
+    let bad = || format!("{s}: valid is mu_r:eta_r, two numbers, e.g. 0.5:0.25");
+    let (m, e) = s.split_once(':').ok_or_else(bad)?;
+    Ok((
+        m.trim().parse().map_err(|_| bad())?,
+        e.trim().parse().map_err(|_| bad())?,
+    ))
 }
 
 pub fn sweep(a: SweepArgs) -> Result<Verdict> {
@@ -176,6 +190,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
         },
         mu_r: p.mu_r.clone(),
         eta_r: p.eta_r.clone(),
+        points: p.points.clone(),
         seeds: p.seeds,
         out: out.clone(),
         jobs: p.jobs,
@@ -183,15 +198,17 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
     };
     let m = plan(&req)?;
     let mpath = out.join("manifest.json");
+    let points = match &p.points {
+        Some(pts) => format!("{} points", pts.len()),
+        None => format!("{} mu_r x {} eta_r", p.mu_r.len(), p.eta_r.len()),
+    };
     println!(
-        "verify sweep: {} runs ({} mu_r x {} eta_r x {} seeds), preset {}, {}, engine {}, dt factor {}; {}",
+        "verify sweep: {} runs ({points} x {} seeds), preset {}, {}, engine {}, dt factor {}; {}",
         m.runs.len(),
-        p.mu_r.len(),
-        p.eta_r.len(),
         p.seeds,
         m.base.preset,
         m.base.rolling,
-        format!("{:?}", m.base.engine).to_lowercase(),
+        m.base.engine.keyword(),
         p.protocol.dt_factor,
         mpath.display()
     );

@@ -74,26 +74,42 @@ impl Manifest {
                 "at least one value each",
             ));
         }
+        let points: Vec<(f64, f64)> = mu_r
+            .iter()
+            .flat_map(|&m| eta_r.iter().map(move |&e| (m, e)))
+            .collect();
+        Self::plan_points(base, &points, seeds, created_utc)
+    }
+
+    /// The runs of a sweep over a list of (mu_r, eta_r) points x seeds (`--points`: points
+    /// that are not a grid, e.g. the speed study's five).
+    pub fn plan_points(
+        base: SweepBase,
+        points: &[(f64, f64)],
+        seeds: u64,
+        created_utc: String,
+    ) -> Result<Self> {
+        if points.is_empty() {
+            return Err(Error::invalid("--points", "(empty)", "at least one point"));
+        }
         if seeds == 0 || seeds > 1000 {
             return Err(Error::invalid("--seeds", seeds, "1 ..= 1000"));
         }
         let mut runs = Vec::new();
         // seed-major: a partly finished sweep already covers the whole map with its first seeds
         for seed in 1..=seeds {
-            for &m in mu_r {
-                for &e in eta_r {
-                    let index = runs.len();
-                    let mut r = RunSpec {
-                        index,
-                        id: format!("mur{m}_etar{e}_s{seed}"),
-                        mu_r: m,
-                        eta_r: e,
-                        seed,
-                        input_hash: String::new(),
-                    };
-                    r.input_hash = input_hash(&base, &r)?;
-                    runs.push(r);
-                }
+            for &(m, e) in points {
+                let index = runs.len();
+                let mut r = RunSpec {
+                    index,
+                    id: format!("mur{m}_etar{e}_s{seed}"),
+                    mu_r: m,
+                    eta_r: e,
+                    seed,
+                    input_hash: String::new(),
+                };
+                r.input_hash = input_hash(&base, &r)?;
+                runs.push(r);
             }
         }
         let mut ids: Vec<&str> = runs.iter().map(|r| r.id.as_str()).collect();
@@ -426,6 +442,8 @@ pub struct SweepRequest {
     pub base: SweepBase,
     pub mu_r: Vec<f64>,
     pub eta_r: Vec<f64>,
+    /// (mu_r, eta_r) points instead of the grid `mu_r x eta_r`.
+    pub points: Option<Vec<(f64, f64)>>,
     pub seeds: u64,
     pub out: PathBuf,
     /// Runs at a time (each uses one core per code).
@@ -443,6 +461,12 @@ pub fn plan(p: &SweepRequest) -> Result<Manifest> {
         .iter()
         .map(|v| ("--mu-r", v))
         .chain(p.eta_r.iter().map(|v| ("--eta-r", v)))
+        .chain(
+            p.points
+                .iter()
+                .flatten()
+                .flat_map(|(m, e)| [("--points", m), ("--points", e)]),
+        )
     {
         if !(v.is_finite() && *v >= 0.0) {
             return Err(Error::invalid(flag, v, "finite numbers >= 0"));
@@ -452,13 +476,16 @@ pub fn plan(p: &SweepRequest) -> Result<Manifest> {
         return Err(Error::invalid("--jobs", p.jobs, "1 ..= 256"));
     }
     let out = &p.out;
-    let mut m = Manifest::plan(
-        p.base.clone(),
-        &p.mu_r,
-        &p.eta_r,
-        p.seeds,
-        super::utc_stamp(),
-    )?;
+    let mut m = match &p.points {
+        Some(points) => Manifest::plan_points(p.base.clone(), points, p.seeds, super::utc_stamp())?,
+        None => Manifest::plan(
+            p.base.clone(),
+            &p.mu_r,
+            &p.eta_r,
+            p.seeds,
+            super::utc_stamp(),
+        )?,
+    };
     let mpath = out.join("manifest.json");
     if mpath.is_file() {
         let old = Manifest::load(&mpath)?;
@@ -590,6 +617,20 @@ mod tests {
     fn plan_hashes_inputs_and_rejects_bad_values() {
         let m = Manifest::plan(base(), &[0.0, 0.5], &[0.0, 0.25], 2, "t".into()).unwrap();
         assert_eq!(m.runs.len(), 8);
+        // points that are not a grid: the same runs as the grid's where they coincide
+        let pts = Manifest::plan_points(base(), &[(0.5, 0.25), (0.0, 0.0)], 2, "t".into()).unwrap();
+        let ids: Vec<&str> = pts.runs.iter().map(|r| r.id.as_str()).collect();
+        assert_eq!(
+            ids,
+            [
+                "mur0.5_etar0.25_s1",
+                "mur0_etar0_s1",
+                "mur0.5_etar0.25_s2",
+                "mur0_etar0_s2"
+            ]
+        );
+        assert!(Manifest::plan_points(base(), &[], 1, "t".into()).is_err());
+
         assert_eq!(m.runs[3].id, "mur0.5_etar0.25_s1");
         assert_eq!(m.runs[4].id, "mur0_etar0_s2");
         let mut hashes: Vec<&str> = m.runs.iter().map(|r| r.input_hash.as_str()).collect();
