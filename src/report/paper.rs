@@ -29,6 +29,9 @@ pub struct Point {
     /// Where the number comes from: rolling model and dt, and for substitutes the directory
     /// and the study's verdict (set by the report; empty from [`aggregate`]).
     pub source: String,
+    /// (seed, steady mu) of each seed: a speed effect is judged seed by seed (the stages of one
+    /// run share its packing).
+    pub per_seed_mu: Vec<(u64, f64)>,
 }
 
 /// Aggregates run results into points, sorted by code, stage, eta_r, mu_r.
@@ -53,7 +56,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
             .iter()
             .filter(|r| r.run.mu_r == mu_r && r.run.eta_r == eta_r && r.stages.len() > k)
             .collect();
-        let vals: Vec<(f64, f64)> = runs
+        let vals: Vec<(f64, f64, u64)> = runs
             .iter()
             .filter_map(|r| {
                 let st = &r.stages[k];
@@ -62,7 +65,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
                 } else {
                     &st.liggghts
                 };
-                c.as_ref().map(|c| (c.mu, c.erot))
+                c.as_ref().map(|c| (c.mu, c.erot, r.run.seed))
             })
             .collect();
         let mus: Vec<f64> = vals.iter().map(|v| v.0).collect();
@@ -80,6 +83,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
             dashpot_stable: runs.iter().all(|r| r.dashpot_stable),
             stability_s: runs.iter().map(|r| r.stability_s).fold(0.0, f64::max),
             source: String::new(),
+            per_seed_mu: vals.iter().map(|v| (v.2, v.0)).collect(),
         });
     }
     pts.sort_by(|a, b| {
@@ -307,7 +311,9 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
         });
         return out;
     }
-    let (s0, s1) = (stages[0], stages[stages.len() - 1]);
+    // the test: per seed, the least-squares slope of mu against log10(speed) over the stages
+    // (the stages of a seed share one packing); a speed effect where the mean slope's 95 % CI
+    // (t over seeds) excludes 0
     let mut mu_rs: Vec<f64> = pts.iter().map(|p| p.mu_r).collect();
     mu_rs.sort_by(f64::total_cmp);
     mu_rs.dedup();
@@ -317,43 +323,115 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
         .fold(f64::INFINITY, f64::min);
     let mut near_ok = true;
     let mut ev = Vec::new();
+    let mut any_effect = false;
     for &e in &etas {
-        let (a, b) = (curve(s0, e), curve(s1, e));
-        for (p, q) in a.iter().zip(&b) {
-            let d = q.mu - p.mu;
-            if within_cis(p.mu, ci(p), q.mu, ci(q)) {
+        for &m in &mu_rs {
+            let by_stage: Vec<&Point> = stages
+                .iter()
+                .filter_map(|&k| curve(k, e).into_iter().find(|p| p.mu_r == m))
+                .collect();
+            if by_stage.len() != stages.len() {
                 continue;
             }
+            let Some(sl) = speed_slope(&by_stage) else {
+                continue;
+            };
+            if sl.mean.abs() <= sl.ci95 {
+                ev.push(format!(
+                    "(mu_r {m}, eta_r {e}): slope {:+.4} ± {:.4} per decade of speed, no effect",
+                    sl.mean, sl.ci95
+                ));
+                continue;
+            }
+            any_effect = true;
             let near = criticals
                 .iter()
-                .any(|&(_, ce, cm)| ce == e && (cm - p.mu_r).abs() <= step * 1.01);
+                .any(|&(_, ce, cm)| ce == e && (cm - m).abs() <= step * 1.01);
             near_ok &= near;
             ev.push(format!(
-                "eta_r {e}, mu_r {}: mu {:+.3} from v = {} to {} m/s ({} the critical mu_r)",
-                p.mu_r,
-                d,
-                p.speed,
-                q.speed,
+                "(mu_r {m}, eta_r {e}): slope {:+.4} ± {:.4} per decade of speed ({} seeds), a \
+                 speed effect {} the critical mu_r",
+                sl.mean,
+                sl.ci95,
+                sl.n,
                 if near { "near" } else { "away from" }
             ));
         }
     }
     out.push(Conclusion {
         claim: claim3,
-        verdict: if ev.is_empty() && criticals.is_empty() {
+        verdict: if ev.is_empty() {
+            ClaimVerdict::NotAssessable
+        } else if !any_effect && criticals.is_empty() {
             ClaimVerdict::NotResolved
-        } else if ev.is_empty() || !near_ok {
+        } else if !any_effect || !near_ok {
             ClaimVerdict::Disagrees
         } else {
             ClaimVerdict::Agrees
         },
         evidence: if ev.is_empty() {
-            "no significant speed effect at any point".into()
+            "needs every stage at a point with the same seeds".into()
         } else {
             ev.join("; ")
         },
     });
     out
+}
+
+/// Mean over seeds of the least-squares slope of steady mu against log10(speed), with its 95 %
+/// CI half-width (t, n - 1 dof).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedSlope {
+    pub mean: f64,
+    pub ci95: f64,
+    pub n: usize,
+}
+
+/// The speed slope of one point's stages (`by_stage`: one point per stage, faster or slower):
+/// one slope per seed present in every stage; None without such a seed or 2 distinct speeds.
+pub fn speed_slope(by_stage: &[&Point]) -> Option<SpeedSlope> {
+    let x: Vec<f64> = by_stage.iter().map(|p| p.speed.log10()).collect();
+    let xm = x.iter().sum::<f64>() / x.len() as f64;
+    let sxx: f64 = x.iter().map(|v| (v - xm) * (v - xm)).sum();
+    if sxx.is_nan() || sxx <= 0.0 {
+        return None;
+    }
+    let seeds: Vec<u64> = by_stage
+        .first()?
+        .per_seed_mu
+        .iter()
+        .map(|s| s.0)
+        .filter(|s| {
+            by_stage
+                .iter()
+                .all(|p| p.per_seed_mu.iter().any(|q| q.0 == *s))
+        })
+        .collect();
+    let slopes: Vec<f64> = seeds
+        .iter()
+        .map(|s| {
+            let y: Vec<f64> = by_stage
+                .iter()
+                .map(|p| p.per_seed_mu.iter().find(|q| q.0 == *s).expect("present").1)
+                .collect();
+            let ym = y.iter().sum::<f64>() / y.len() as f64;
+            x.iter()
+                .zip(&y)
+                .map(|(a, b)| (a - xm) * (b - ym))
+                .sum::<f64>()
+                / sxx
+        })
+        .collect();
+    if slopes.is_empty() {
+        return None;
+    }
+    // one seed: a slope without a CI (infinite), nothing resolved
+    let (mean, ci95) = mean_ci95(&slopes);
+    Some(SpeedSlope {
+        mean,
+        ci95,
+        n: slopes.len(),
+    })
 }
 
 /// How a heat map draws its cells: the colour scale, a mark appended to a cell's value, and
@@ -617,6 +695,34 @@ mod tests {
         assert!((q.mu - 0.454).abs() < 1e-12 && q.seeds == 3);
         assert!(q.mu_ci95 > 0.0 && q.mu_ci95 < 0.01);
         assert!(!p.iter().find(|p| p.mu_r == 1.0).unwrap().dashpot_stable);
+    }
+
+    #[test]
+    fn speed_slope_is_per_seed_against_log_speed() {
+        let stage = |speed: f64, mus: &[(u64, f64)]| Point {
+            code: Code::Native,
+            mu_r: 0.5,
+            eta_r: 0.5,
+            stage: 0,
+            speed,
+            mu: 0.0,
+            mu_ci95: 0.0,
+            seeds: mus.len(),
+            erot: 0.0,
+            dashpot_stable: true,
+            stability_s: 0.0,
+            source: String::new(),
+            per_seed_mu: mus.to_vec(),
+        };
+        // seed 1: +0.05 per decade; seed 2: +0.03; seed 3 misses a stage (left out)
+        let a = stage(0.002, &[(1, 0.50), (2, 0.60), (3, 0.1)]);
+        let b = stage(0.02, &[(1, 0.55), (2, 0.63)]);
+        let s = speed_slope(&[&a, &b]).unwrap();
+        assert_eq!(s.n, 2);
+        assert!((s.mean - 0.04).abs() < 1e-12, "{s:?}");
+        // t(1) = 12.71, standard error 0.01
+        assert!((s.ci95 - 12.706 * 0.01).abs() < 1e-3, "{s:?}");
+        assert!(speed_slope(&[&a, &a]).is_none(), "one speed has no slope");
     }
 
     #[test]

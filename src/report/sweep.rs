@@ -119,6 +119,9 @@ fn converged_points(dir: &Path) -> Result<Vec<Point>> {
         erot: finest.steady.erot,
         dashpot_stable: finest.stability.stable,
         stability_s: finest.stability.entries.first().ok_or_else(bad)?.criterion,
+        per_seed_mu: (1..)
+            .zip(finest.steady.per_seed_mu.iter().copied())
+            .collect(),
         source: format!(
             "{} at dt {:.3e} s (convergence study {name}: {})",
             v.rolling,
@@ -679,6 +682,7 @@ mod tests {
             dashpot_stable: stable,
             stability_s: if stable { 1.0 } else { 10.0 },
             source: source.into(),
+            per_seed_mu: Vec::new(),
         }
     }
 
