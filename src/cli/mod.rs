@@ -94,10 +94,10 @@ impl PresetArg {
 #[derive(Args, Debug, Clone, PartialEq)]
 pub struct LiggghtsArgs {
     /// LIGGGHTS binary.
-    #[arg(long)]
+    #[arg(long, help_heading = "LIGGGHTS")]
     pub liggghts: Option<PathBuf>,
     /// Timeout of one LIGGGHTS run [s] (default: 600 for contact cases, 7 days for shear runs).
-    #[arg(long)]
+    #[arg(long, help_heading = "LIGGGHTS")]
     pub timeout: Option<u64>,
 }
 

@@ -14,74 +14,76 @@ use std::path::PathBuf;
 #[derive(Args, Debug, Clone)]
 pub struct ShearArgs {
     /// Rolling friction coefficient mu_r.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, help_heading = "Case")]
     pub mu_r: f64,
     /// Rolling viscous damping eta_r (epsd and epsd3 only).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, help_heading = "Case")]
     pub eta_r: f64,
     /// Rolling model (the paper's: epsd).
-    #[arg(long, value_enum, default_value = "epsd")]
+    #[arg(long, value_enum, default_value = "epsd", help_heading = "Case")]
     pub rolling: RollingArg,
     /// Preset: ci (few hundred particles, minutes), fast (paper box, nightly), paper.
-    #[arg(long, value_enum, default_value = "fast")]
+    #[arg(long, value_enum, default_value = "fast", help_heading = "Case")]
     pub preset: PresetArg,
     /// Number of seeds (initial packings).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, help_heading = "Case")]
     pub seeds: u64,
     /// First seed: runs seeds first-seed ..= first-seed + seeds - 1.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, help_heading = "Case")]
     pub first_seed: u64,
     #[command(flatten)]
     pub protocol: ProtocolArgs,
     /// Threads of the native solver (default: all cores, minus one while LIGGGHTS runs).
-    #[arg(long)]
+    #[arg(long, help_heading = "Run")]
     pub threads: Option<usize>,
     /// Output directory (default: a new directory under ./runs/).
-    #[arg(long)]
+    #[arg(long, help_heading = "Run")]
     pub out: Option<PathBuf>,
     /// Run only the native solver.
-    #[arg(long, conflicts_with = "liggghts_only")]
+    #[arg(long, conflicts_with = "liggghts_only", help_heading = "Run")]
     pub native_only: bool,
     /// Run only LIGGGHTS.
-    #[arg(long)]
+    #[arg(long, help_heading = "Run")]
     pub liggghts_only: bool,
     /// Allow stages with inertial number I > 1e-3.
-    #[arg(long)]
+    #[arg(long, help_heading = "Checks")]
     pub allow_inertial: bool,
-    /// Write particle snapshots (VTK, for ParaView) every N steps (0: the preset's choice).
-    #[arg(long, default_value_t = 0)]
+    /// Write particle and plate snapshots for ParaView (.vtu tied by seedN/vtk/<code>.pvd) every
+    /// N steps (0: the preset's choice: ci 10,000, fast 50,000, paper 100,000).
+    #[arg(long, default_value_t = 0, help_heading = "Run")]
     pub snapshot_every: u64,
     /// Refuse to run (exit 2) when the explicit rolling dashpot is expected to be unstable.
-    #[arg(long)]
+    #[arg(long, help_heading = "Checks")]
     pub strict_stability: bool,
     /// Flat plates instead of plates with teeth (flat plates let the gouge slip).
-    #[arg(long)]
+    #[arg(long, help_heading = "Changes to the preset")]
     pub flat_plates: bool,
     /// Wall time between checkpoints of each native run [s] (default 300; 0: at every output
-    /// step; -1: none). Rerunning the same command resumes from the checkpoint.
-    #[arg(long, allow_negative_numbers = true, value_parser = checkpoint_seconds)]
+    /// step; -1: none); LIGGGHTS runs longer than that write restart files about as often.
+    /// Rerunning the same command resumes from them.
+    #[arg(long, allow_negative_numbers = true, value_parser = checkpoint_seconds, help_heading = "Run")]
     pub checkpoint_every: Option<f64>,
     /// Tooth height [m] of the plates (default 2e-4).
-    #[arg(long)]
+    #[arg(long, help_heading = "Changes to the preset")]
     pub tooth_height: Option<f64>,
     /// Tooth wavelength [m] along x; box_x must hold a whole number of teeth (default 5e-4).
-    #[arg(long)]
+    #[arg(long, help_heading = "Changes to the preset")]
     pub tooth_wavelength: Option<f64>,
     /// Particle count (the preset's box is scaled in x and z to keep the sample height).
-    #[arg(long)]
+    #[arg(long, help_heading = "Changes to the preset")]
     pub particles: Option<usize>,
     /// Coefficient of normal restitution (the presets use the paper's Table 2: 1, no normal
     /// damping). LIGGGHTS accepts 0.05 < e <= 1.
-    #[arg(long)]
+    #[arg(long, help_heading = "Changes to the preset")]
     pub restitution: Option<f64>,
     /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (their 95 % CIs must
     /// also overlap). The default suits 3 seeds of 2500 particles; one seed of the ci preset
     /// fluctuates more (seed-to-seed spread about 0.03).
-    #[arg(long, default_value_t = MU_ATOL)]
+    #[arg(long, default_value_t = MU_ATOL, help_heading = "Checks")]
     pub mu_atol: f64,
     /// Largest accepted relative deviation of each code's mean normal stress (steady window,
     /// mean over seeds) from the target. One seed of the ci preset fluctuates by about 1-2 %.
-    #[arg(long, default_value_t = STRESS_RTOL)]
+    #[arg(long, default_value_t = STRESS_RTOL, help_heading = "Checks")]
     pub stress_rtol: f64,
     #[command(flatten)]
     pub liggghts: LiggghtsArgs,
@@ -93,15 +95,15 @@ pub struct ShearArgs {
 pub struct ProtocolArgs {
     /// Shear speeds [m/s], comma separated: stages in sequence, as in the paper (replaces the
     /// preset's stages).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_delimiter = ',', help_heading = "Changes to the preset")]
     pub speeds: Option<Vec<f64>>,
     /// Shear strain of each stage (replaces the preset's).
-    #[arg(long)]
+    #[arg(long, help_heading = "Changes to the preset")]
     pub strain: Option<f64>,
     /// Time step as a multiple of the preset's (compression steps and output interval scale
     /// with 1 / factor, so the same physical time and strain are covered): runs a case at a
     /// converged dt, e.g. 0.25.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, help_heading = "Changes to the preset")]
     pub dt_factor: f64,
 }
 
