@@ -1,8 +1,9 @@
 //! Plots of one contact run: the main channel of both codes overlaid, and the relative error of
 //! every channel against time (what the nightly report and `verify contact --out` show).
 
+use crate::compare::CONTACT_RTOL;
 use crate::error::Result;
-use crate::report::plot::{decimate, line_plot, Curve};
+use crate::report::plot::{decimate, line_plot, log_error_plot, Curve};
 use crate::series::Series;
 use std::path::Path;
 
@@ -101,12 +102,13 @@ pub fn contact_plots(
         ],
     )?;
     let e = decimate(&relative_error(lig, nat), PLOT_POINTS);
-    line_plot(
+    log_error_plot(
         &dir.join("error.svg"),
-        &format!("{title}: largest relative error over all channels"),
+        &format!("{title}: largest |LIGGGHTS - native| / peak over all channels"),
         "time [s]",
-        "max |LIGGGHTS - native| / peak",
-        &[Curve::new("relative error", &e, 3)],
+        &[("relative error".to_string(), e)],
+        CONTACT_RTOL,
+        1e-17,
     )
 }
 

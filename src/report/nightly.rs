@@ -7,7 +7,7 @@ use crate::fsutil::write_atomic;
 use crate::report::bars::{bar_chart, Bar, BarGroup};
 use crate::report::history::Record;
 use crate::report::html::{table, text, text_rows, Cell, Page};
-use crate::report::plot::{line_plot, Curve, CurveData};
+use crate::report::plot::{line_plot, log_error_plot, Curve, CurveData};
 use crate::run::nightly_outcome::{CodeStats, NightlySummary, ShearRow};
 use maud::{html, Markup};
 use std::path::Path;
@@ -473,25 +473,21 @@ fn trend_plots(
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         data.push((case.clone(), pts));
     }
-    let span = history.iter().map(day).fold(0.0, f64::max).max(1.0);
-    let tol = vec![(0.0, CONTACT_RTOL), (span, CONTACT_RTOL)];
-    let mut curves: Vec<Curve> = data
-        .iter()
-        .enumerate()
-        .map(|(k, (l, pts))| Curve::new(l, pts, k + 2))
-        .collect();
-    curves.push(Curve::new("tolerance", &tol, 3).dashed());
     let path = plots.join("trend_contact.svg");
-    line_plot(
+    log_error_plot(
         &path,
         "contact cases: largest relative error per night",
         "days since the first night in the history",
-        "max rel err",
-        &curves,
+        &data,
+        CONTACT_RTOL,
+        1e-17,
     )?;
     figs.push(p.svg_file(
         &path,
-        &format!("{nights} night(s) in the history; tolerance dashed."),
+        &format!(
+            "{nights} night(s) in the history; log axis, tolerance dashed, a bit-identical \
+             night (error 0) on the 1e-17 floor."
+        ),
     )?);
     // shear: steady mu of both codes per case (colour per case; native dashed)
     // entries alternate LIGGGHTS, native

@@ -100,6 +100,69 @@ pub fn line_plot(
     y_desc: &str,
     curves: &[Curve],
 ) -> Result<()> {
+    plot_with(path, title, x_desc, y_desc, curves, &tick, None)
+}
+
+/// Relative errors drawn on a log axis against a tolerance: each curve's values clipped below
+/// at `floor` (an error of 0, bit-identical results, sits on the floor), the tolerance as a
+/// dashed line, the axis from the floor to above the larger of the tolerance and the largest
+/// error.
+pub fn log_error_plot(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    curves: &[(String, Vec<(f64, f64)>)],
+    tolerance: f64,
+    floor: f64,
+) -> Result<()> {
+    let lg = |v: f64| v.max(floor).log10();
+    let logged: Vec<(String, Vec<(f64, f64)>)> = curves
+        .iter()
+        .map(|(l, pts)| (l.clone(), pts.iter().map(|p| (p.0, lg(p.1))).collect()))
+        .collect();
+    let (x0, x1) = curves
+        .iter()
+        .flat_map(|c| c.1.iter().map(|p| p.0))
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    let (x0, x1) = if x0.is_finite() { (x0, x1) } else { (0.0, 1.0) };
+    let tol = vec![(x0, lg(tolerance)), (x1, lg(tolerance))];
+    let mut drawn: Vec<Curve> = logged
+        .iter()
+        .enumerate()
+        .map(|(k, (l, pts))| Curve::new(l, pts, k + 2))
+        .collect();
+    drawn.push(Curve::new("tolerance", &tol, 3).dashed());
+    let fmt = |v: &f64| format!("1e{}", v.round() as i64);
+    let top = logged
+        .iter()
+        .flat_map(|c| c.1.iter().map(|p| p.1))
+        .fold(lg(tolerance), f64::max)
+        .ceil()
+        + 1.0;
+    plot_with(
+        path,
+        title,
+        x_desc,
+        &format!("relative error (log; 0 drawn at {floor:.0e})"),
+        &drawn,
+        &fmt,
+        Some((lg(floor), top)),
+    )
+}
+
+/// [`line_plot`] with a y tick formatter and an optional fixed y range.
+fn plot_with(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    curves: &[Curve],
+    y_fmt: &dyn Fn(&f64) -> String,
+    y_range: Option<(f64, f64)>,
+) -> Result<()> {
     let err = |e: String| Error::io(path, std::io::Error::other(e));
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -137,6 +200,10 @@ pub fn line_plot(
     } else {
         0.5 * y0.abs().max(1.0)
     };
+    let (y0, y1, pad) = match y_range {
+        Some((a, b)) => (a, b, 0.0),
+        None => (y0, y1, pad),
+    };
     let tmp = path.with_extension("svg.tmp");
     {
         let root = SVGBackend::new(&tmp, (900, 520)).into_drawing_area();
@@ -153,7 +220,7 @@ pub fn line_plot(
             .x_desc(x_desc)
             .y_desc(y_desc)
             .x_label_formatter(&tick)
-            .y_label_formatter(&tick)
+            .y_label_formatter(y_fmt)
             .draw()
             .map_err(|e| err(e.to_string()))?;
         for c in curves {
