@@ -335,6 +335,16 @@ pub fn run_native(
         return Err(e);
     }
     progress.finish();
+    // the paper's rotation map of the final state (rotations accumulated over the whole run)
+    crate::report::rotation::rotation_map(
+        &out.join("rotation_map.svg"),
+        &format!(
+            "native, mu_r {}, eta_r {}, seed {}: accumulated rotation at step {}",
+            case.material.rolling_friction, case.material.rolling_damping, case.seed, sim.step
+        ),
+        &sim.snapshot(),
+        case.box_x,
+    )?;
     let run = CodeRun {
         rows,
         wall_time: wall_before + t0.elapsed().as_secs_f64(),

@@ -10,6 +10,7 @@ pub mod paper;
 pub mod plot;
 pub mod progress;
 pub mod replay;
+pub mod rotation;
 pub mod shear;
 pub mod sweep;
 pub mod vtk;

@@ -583,6 +583,35 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         }
     }
     page.figures(&fig_html);
+    // the paper's rotation maps (its Figs 8-11): seed 1 of each point, as each run drew it
+    let maps: Vec<(String, String)> = m
+        .runs
+        .iter()
+        .filter(|r| r.seed == 1)
+        .filter_map(|r| {
+            let rel = format!("runs/{}/seed1/rotation_map.svg", r.id);
+            dir.join(&rel)
+                .is_file()
+                .then(|| (format!("mu_r {}, eta_r {}", r.mu_r, r.eta_r), rel))
+        })
+        .collect();
+    if !maps.is_empty() {
+        page.heading("rotation", "Rotation maps");
+        page.para(
+            "Particles seen along z, coloured by their accumulated rotation at the end of the \
+             run (seed 1 of each point; the paper's Figs 8-11). Each opens at full size.",
+        );
+        page.push(html! {
+            div.plots {
+                @for (label, rel) in &maps {
+                    figure {
+                        a href=(rel) { img src=(rel) alt=(label) style="max-width: 280px"; }
+                        figcaption { (label) }
+                    }
+                }
+            }
+        });
+    }
     page.heading("table", "Points");
     let rows: Vec<Vec<(String, &'static str)>> = points
         .iter()
