@@ -101,16 +101,7 @@ fn contact_rolling_plastic_agrees_and_writes_outputs() {
 fn reference_mode_needs_no_liggghts() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = verify(&[
-        "contact",
-        "--case",
-        "rolling_unload",
-        "--reference",
-        "--liggghts",
-        "/nonexistent/liggghts",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::reference_contact(&out, &["--liggghts", "/nonexistent/liggghts"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     // one verdict line ends every comparing command
     let stdout = String::from_utf8_lossy(&o.stdout);
@@ -123,15 +114,7 @@ fn reference_mode_needs_no_liggghts() {
 fn json_puts_one_document_on_stdout() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = verify(&[
-        "contact",
-        "--case",
-        "rolling_unload",
-        "--reference",
-        "--json",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::reference_contact(&out, &["--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(doc["verdict"], "agree");
@@ -158,18 +141,7 @@ fn json_puts_one_document_on_stdout() {
 fn studies_round_trip_plan_and_refuse_unknown_fields() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = verify(&[
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--strain",
-        "0.05",
-        "--native-only",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::short_ci_shear(&out, &["--native-only"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let study = out.join("study.toml");
     let text = std::fs::read_to_string(&study).unwrap();

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::{text, verify};
+use common::text;
 
 const READER: &str = r#"
 import json, sys
@@ -49,23 +49,17 @@ fn snapshots_load_in_vtk_with_their_fields_count_and_time() {
     common::liggghts();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = verify(&[
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--strain",
-        "0.05",
-        "--snapshot-every",
-        "4000",
-        "--mu-atol",
-        "0.5",
-        "--stress-rtol",
-        "0.5",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::short_ci_shear(
+        &out,
+        &[
+            "--snapshot-every",
+            "4000",
+            "--mu-atol",
+            "0.5",
+            "--stress-rtol",
+            "0.5",
+        ],
+    );
     let t = text(&o);
     assert!(matches!(o.status.code(), Some(0) | Some(1)), "{t}");
     assert!(

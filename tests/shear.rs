@@ -276,19 +276,7 @@ fn failing_liggghts_keeps_partial_outputs_and_shows_the_log() {
     use std::os::unix::fs::PermissionsExt;
     std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
     let out = dir.path().join("out");
-    let o = verify(&[
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--strain",
-        "0.05",
-        "--liggghts",
-        fake.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = common::short_ci_shear(&out, &["--liggghts", fake.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("Lost atoms"), "{}", text(&o));
     assert!(out.join("seed1/liggghts/in.deck").is_file());

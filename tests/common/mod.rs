@@ -34,3 +34,36 @@ pub fn text(o: &std::process::Output) -> String {
         String::from_utf8_lossy(&o.stderr)
     )
 }
+
+/// `verify shear` of one ci-preset seed sheared to strain 0.05 (seconds), writing to `out`,
+/// with `extra` flags.
+pub fn short_ci_shear(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.05",
+        "--out",
+        out.to_str().expect("a UTF-8 path"),
+    ];
+    args.extend_from_slice(extra);
+    verify(&args)
+}
+
+/// `verify contact --case rolling_unload --reference` (no LIGGGHTS needed) into `out`, with
+/// `extra` flags.
+pub fn reference_contact(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "contact",
+        "--case",
+        "rolling_unload",
+        "--reference",
+        "--out",
+        out.to_str().expect("a UTF-8 path"),
+    ];
+    args.extend_from_slice(extra);
+    verify(&args)
+}
