@@ -83,28 +83,23 @@ pub fn rotation_map(path: &Path, title: &str, s: &Snapshot, box_x: f64) -> Resul
         let mut order: Vec<usize> = (0..s.x.len()).collect();
         // the most rotated on top
         order.sort_by(|a, b| mag[*a].total_cmp(&mag[*b]));
-        chart
-            .draw_series(order.iter().map(|&i| {
-                let x = s.x[i][0].rem_euclid(box_x);
-                let r = ((s.radius[i] * scale).round() as i32).max(1);
-                Circle::new(
-                    (x * 1e3, s.x[i][1] * 1e3),
-                    r,
-                    ShapeStyle::from(&color(mag[i], hi)).filled(),
-                )
-            }))
-            .map_err(draw_err)?;
-        chart
-            .draw_series(order.iter().map(|&i| {
-                let x = s.x[i][0].rem_euclid(box_x);
-                let r = ((s.radius[i] * scale).round() as i32).max(1);
-                Circle::new(
-                    (x * 1e3, s.x[i][1] * 1e3),
-                    r,
-                    BLACK.mix(0.3).stroke_width(1),
-                )
-            }))
-            .map_err(draw_err)?;
+        // centre [mm] and radius [px] of particle i's disc
+        let disc = |i: usize| {
+            let x = s.x[i][0].rem_euclid(box_x);
+            (
+                (x * 1e3, s.x[i][1] * 1e3),
+                ((s.radius[i] * scale).round() as i32).max(1),
+            )
+        };
+        for &i in &order {
+            let (c, r) = disc(i);
+            chart
+                .draw_series([
+                    Circle::new(c, r, ShapeStyle::from(&color(mag[i], hi)).filled()),
+                    Circle::new(c, r, BLACK.mix(0.3).stroke_width(1)),
+                ])
+                .map_err(draw_err)?;
+        }
         for tri in s.plates.iter().flatten() {
             let pts: Vec<(f64, f64)> = tri
                 .iter()
