@@ -583,6 +583,41 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         }
     }
     page.figures(&fig_html);
+    // the time-step convergence studies used as stand-ins: their mu(dt) and E_rot(dt) figures
+    let studies: Vec<&PathBuf> = converged
+        .iter()
+        .filter(|d| d.join("summary.json").is_file() && d.join("mu_dt.svg").is_file())
+        .collect();
+    if !studies.is_empty() {
+        page.heading("convergence", "Time-step convergence of the stand-ins");
+        for d in studies {
+            let v: ConvergenceSummary = crate::run::load(&d.join("summary.json"))?;
+            let mut figs = Vec::new();
+            for (f, what) in [
+                ("mu_dt.svg", "steady μ"),
+                ("erot_dt.svg", "rotational energy"),
+            ] {
+                if d.join(f).is_file() {
+                    figs.push(page.svg_file(
+                        &d.join(f),
+                        &format!(
+                            "{what} against dt at (μr {}, ηr {}), {} ({}: {})",
+                            v.mu_r,
+                            v.eta_r,
+                            v.rolling,
+                            dir_name(d),
+                            if v.converged {
+                                "converged"
+                            } else {
+                                "NOT shown converged"
+                            }
+                        ),
+                    )?);
+                }
+            }
+            page.figures(&figs);
+        }
+    }
     // the paper's rotation maps (its Figs 8-11): seed 1 of each point, as each run drew it
     let maps: Vec<(String, String)> = m
         .runs
