@@ -220,7 +220,7 @@ fn strict_stability_refuses_an_unstable_dashpot() {
 
 /// The implicit rolling dashpot removes the explicit dashpot's instability: at the paper's dt
 /// with mu_r = 1, eta_r = 0.5 the explicit epsd shows orders of magnitude more rotational
-/// kinetic energy than epsd_implicit (which matches epsd at a converged dt, see README).
+/// kinetic energy than epsd_implicit (which matches epsd at a converged dt, see docs/stability.md).
 #[test]
 fn implicit_dashpot_tames_rotational_energy_at_the_paper_dt() {
     let dir = tempfile::tempdir().unwrap();

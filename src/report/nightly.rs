@@ -289,7 +289,7 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         p.figures(&figs);
     }
     p.para(
-        "Files: summary.json (schema in the README), contact/<case>_<model>/ and shear/<case>/ \
+        "Files: summary.json (schema in docs/nightly.md), contact/<case>_<model>/ and shear/<case>/ \
          with each code's CSV, decks and logs; the history file holds one JSON line per case per night.",
     );
     Ok(p.finish())

@@ -1,4 +1,4 @@
-//! The rows and summary of a night (`DIR/summary.json`, schema in the README), apart from the
+//! The rows and summary of a night (`DIR/summary.json`, schema in docs/nightly.md), apart from the
 //! orchestration so that the report (src/report/nightly.rs) reads them without importing it.
 
 use crate::compare::Paired;
@@ -161,7 +161,7 @@ pub struct ReplayRow {
     pub min_horizon: u64,
 }
 
-/// `DIR/summary.json` of `verify nightly` (schema in the README).
+/// `DIR/summary.json` of `verify nightly` (schema in docs/nightly.md).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NightlySummary {
     pub schema: u32,
