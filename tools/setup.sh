@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One command: install LIGGGHTS (Debian package), Chromium (the tests render the nightly
+# One command: install LIGGGHTS (Debian package), python3-vtk9 (a test reads the ParaView files), Chromium (the tests render the nightly
 # report in it) and SLURM (the sweep's scheduler test), build, and run the default case.
 # Usage: bash tools/setup.sh        (as root, or with sudo available)
 set -euo pipefail
