@@ -141,8 +141,24 @@ fn json_puts_one_document_on_stdout() {
 fn studies_round_trip_plan_and_refuse_unknown_fields() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = common::short_ci_shear(&out, &["--native-only"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // a ci-sized study, end to end from its file
+    let first = dir.path().join("ci.toml");
+    std::fs::write(
+        &first,
+        format!(
+            "version = 1\ncommand = \"shear\"\n[options]\npreset = \"ci\"\nseeds = 1\n\
+             strain = 0.05\nnative_only = true\nout = \"{}\"\n",
+            out.display()
+        ),
+    )
+    .unwrap();
+    let o = verify(&["run", first.to_str().unwrap()]);
+    let t = String::from_utf8_lossy(&o.stdout).to_string();
+    assert_eq!(o.status.code(), Some(0), "{t}{}", stderr(&o));
+    assert!(
+        t.contains("plan (verify shear): 1 run(s), 16141 steps"),
+        "{t}"
+    );
     let study = out.join("study.toml");
     let text = std::fs::read_to_string(&study).unwrap();
     for line in [
@@ -150,17 +166,27 @@ fn studies_round_trip_plan_and_refuse_unknown_fields() {
         "preset = \"ci\"",
         "strain = 0.05",
         "native_only = true",
+        "mu_atol = 0.02",
     ] {
         assert!(text.contains(line), "{line}: {text}");
     }
+    // the resolved copy repeats it: in place (the finished seed reused), and into another
+    // directory with identical results
     let o = verify(&["run", study.to_str().unwrap()]);
     let t = String::from_utf8_lossy(&o.stdout).to_string();
     assert_eq!(o.status.code(), Some(0), "{t}{}", stderr(&o));
-    assert!(
-        t.contains("plan (verify shear): 1 run(s), 16141 steps"),
-        "{t}"
-    );
     assert!(t.contains("native result found, reused"), "{t}");
+    let again = dir.path().join("again");
+    let o = verify(&[
+        "run",
+        study.to_str().unwrap(),
+        "--",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let csv = |d: &Path| std::fs::read(d.join("seed1/native.csv")).unwrap();
+    assert_eq!(csv(&out), csv(&again), "the repeated run differs");
     // a field overridden, the plan only: nothing runs
     let other = dir.path().join("other");
     let o = verify(&[
@@ -204,7 +230,12 @@ fn studies_round_trip_plan_and_refuse_unknown_fields() {
         let p = e.unwrap().path();
         let o = verify(&["run", p.to_str().unwrap(), "--dry-run"]);
         assert_eq!(o.status.code(), Some(0), "{}: {}", p.display(), stderr(&o));
-        assert!(String::from_utf8_lossy(&o.stdout).contains("plan"));
+        let t = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(
+            t.contains("plan (verify") && t.contains("core-hours"),
+            "{}: {t}",
+            p.display()
+        );
         n += 1;
     }
     assert!(n >= 6, "studies/ holds {n} studies");

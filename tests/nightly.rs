@@ -5,88 +5,9 @@
 
 mod common;
 
-use common::{text, verify};
+use common::{browse, text, verify};
 use dem_verify::run::nightly::NightlySummary;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-/// Debian's chromium; the test fails (never skips) without it.
-fn chromium() -> PathBuf {
-    for c in ["chromium", "chromium-browser", "google-chrome"] {
-        if let Ok(o) = Command::new("sh")
-            .args(["-c", &format!("command -v {c}")])
-            .output()
-        {
-            let p = String::from_utf8_lossy(&o.stdout).trim().to_string();
-            if o.status.success() && !p.is_empty() {
-                return PathBuf::from(p);
-            }
-        }
-    }
-    panic!("this test renders the report in headless Chromium and none is installed: apt-get install -y chromium");
-}
-
-/// Longest a headless Chromium run may take before it is killed and tried again. Chromium
-/// renders the report in about 3 s here, but it was seen (2026-12-02, in CI) to hang without
-/// end in `--screenshot`; the test must not hang with it.
-const BROWSER_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(90);
-
-/// Runs headless Chromium on `page` with `extra` arguments (fresh profile, no network
-/// services): up to 3 attempts of at most [`BROWSER_TIMEOUT`] each (a hung run is killed with
-/// its whole process group); panics naming the attempts if none finishes.
-fn browse(profile: &Path, page: &Path, extra: &[&str]) -> Output {
-    use std::os::unix::process::CommandExt;
-    let url = format!("file://{}", page.canonicalize().unwrap().display());
-    for attempt in 1..=3 {
-        let dir = profile.with_extension(format!("try{attempt}"));
-        std::fs::create_dir_all(&dir).unwrap();
-        let (out_path, err_path) = (dir.join("stdout"), dir.join("stderr"));
-        let mut child = Command::new(chromium())
-            .args([
-                "--headless",
-                "--no-sandbox",
-                "--disable-gpu",
-                "--disable-quic",
-                "--no-first-run",
-                "--disable-background-networking",
-                "--disable-component-update",
-                "--disable-sync",
-                "--enable-logging=stderr",
-                "--v=0",
-            ])
-            .arg(format!("--user-data-dir={}", dir.join("profile").display()))
-            .args(extra)
-            .arg(&url)
-            .stdout(std::fs::File::create(&out_path).unwrap())
-            .stderr(std::fs::File::create(&err_path).unwrap())
-            .process_group(0)
-            .spawn()
-            .expect("run chromium");
-        let t0 = std::time::Instant::now();
-        let status = loop {
-            if let Some(st) = child.try_wait().unwrap() {
-                break Some(st);
-            }
-            if t0.elapsed() > BROWSER_TIMEOUT {
-                let _ = Command::new("kill")
-                    .args(["-KILL", "--", &format!("-{}", child.id())])
-                    .status();
-                let _ = child.wait();
-                break None;
-            }
-            std::thread::sleep(std::time::Duration::from_millis(100));
-        };
-        if let Some(status) = status {
-            return Output {
-                status,
-                stdout: std::fs::read(&out_path).unwrap(),
-                stderr: std::fs::read(&err_path).unwrap(),
-            };
-        }
-        eprintln!("chromium attempt {attempt} hung for {BROWSER_TIMEOUT:?}: killed, retrying");
-    }
-    panic!("headless chromium hung 3 times on {url} (each killed after {BROWSER_TIMEOUT:?})");
-}
+use std::path::Path;
 
 fn body_attr(dom: &str, name: &str) -> Option<usize> {
     let key = format!("{name}=\"");

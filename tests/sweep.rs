@@ -200,9 +200,46 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
         (cp[0]["mu_r"].as_f64(), cp[0]["eta_r"].as_f64()),
         (Some(1.0), Some(0.5))
     );
-    assert!(std::fs::read_to_string(out.join("report.html"))
-        .unwrap()
-        .contains("converged dt"));
+    // the argument on one page: the bottom line, the stand-in's mu(dt) figures, the judged
+    // map with its sources, the rotation maps; rendered in headless Chromium, the screenshot
+    // kept in target/tmp/sweep-test/report.png
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for part in [
+        "Bottom line",
+        "on stable or converged numbers",
+        "Time-step convergence of the stand-ins",
+        "against dt at (μr 1, ηr 0.5)",
+        "on stable or converged numbers: each point",
+        "Rotation maps",
+        "rotation_map.svg",
+        "judged from",
+    ] {
+        assert!(html.contains(part), "the report lacks {part:?}");
+    }
+    assert!(out.join("figures/heat_native_stage0_judged.svg").is_file());
+    assert!(out
+        .join("runs/mur1_etar0.5_s1/seed1/rotation_map.svg")
+        .is_file());
+    let keep = Path::new(env!("CARGO_TARGET_TMPDIR")).join("sweep-test");
+    let _ = std::fs::remove_dir_all(&keep);
+    std::fs::create_dir_all(&keep).unwrap();
+    let shot = keep.join("report.png");
+    let o = common::browse(
+        &keep.join("profile"),
+        &out.join("report.html"),
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1400,3000",
+            "--hide-scrollbars",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let png = std::fs::read(&shot).unwrap();
+    assert!(
+        png.starts_with(b"\x89PNG") && png.len() > 50_000,
+        "{} bytes",
+        png.len()
+    );
     // a directory that is neither a sweep nor a study is refused, naming the option
     let o = verify(&[
         "sweep",

@@ -355,6 +355,16 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
             }
             Some((Plan::of(&runs), "verify sweep".into()))
         }
+        Command::Nightly(a) => {
+            // the shear points dominate (23 contact runs and the replay take minutes)
+            let mut runs = Vec::new();
+            for c in crate::run::nightly::shear_cases(a.quick)? {
+                for code in codes(Engine::Both) {
+                    runs.push((code, c.clone()));
+                }
+            }
+            Some((Plan::of(&runs), "verify nightly, its shear points".into()))
+        }
         _ => None,
     })
 }

@@ -224,6 +224,29 @@ fn shear_dir(mu_r: f64, eta_r: f64, rolling: RollingModel) -> String {
     format!("shear/{rolling}_mur{mu_r}_etar{eta_r}")
 }
 
+/// Every seed's shear case of a night (full: the fast preset, FULL_SEEDS seeds per point; quick:
+/// the ci preset, one seed), both codes run each: what a study's plan counts.
+pub fn shear_cases(quick: bool) -> Result<Vec<crate::spec::shear::ShearCase>> {
+    let mut out = Vec::new();
+    for &(mu_r, eta_r, rolling) in &SHEAR_POINTS {
+        let seeds = if quick { 1 } else { FULL_SEEDS };
+        for seed in 1..=seeds {
+            let (c, _) = crate::spec::shear::ShearCase::build(&CaseRequest {
+                preset: if quick { Preset::Ci } else { Preset::Fast },
+                rolling,
+                mu_r,
+                eta_r,
+                seed,
+                protocol: Protocol::default(),
+                overrides: Overrides::default(),
+                allow_inertial: false,
+            })?;
+            out.push(c);
+        }
+    }
+    Ok(out)
+}
+
 /// One shear case of the night (errors are kept in the row, the night goes on).
 fn shear_night(
     a: &NightlyRequest,
