@@ -229,7 +229,7 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
         &out.join("report.html"),
         &[
             &format!("--screenshot={}", shot.display()),
-            "--window-size=1400,3000",
+            "--window-size=1400,9000",
             "--hide-scrollbars",
         ],
     );

@@ -501,16 +501,19 @@ pub fn heat_map(title: &str, points: &[&Point], style: &HeatStyle) -> Result<Str
     // map, then the colour bar and its labels; wide enough for the legend's longest line
     let map_w = 120 + cw * mus.len() as u32;
     let legend_w = legend.iter().map(|l| l.chars().count()).max().unwrap_or(0) as u32 * 7 + 40;
-    let w = (map_w + 110).max(legend_w);
+    // wide enough for the title too (16 px sans-serif: about 8 px a character)
+    let title_w = title.chars().count() as u32 * 8 + 40;
+    let w = (map_w + 110).max(legend_w).max(title_w);
     let h = 60 + ch * etas.len() as u32 + 70 + 18 * legend.len() as u32;
     let mut s = String::new();
     {
         let root = SVGBackend::with_string(&mut s, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        let (map_area, _) = root.split_horizontally(map_w + 10);
+        // the title over the whole width, the map under it
+        let body = root.titled(title, ("sans-serif", 16)).map_err(draw_err)?;
+        let (map_area, _) = body.split_horizontally(map_w + 10);
         let map_area = map_area.margin(0, 18 * legend.len() as u32, 0, 0);
         let mut chart = ChartBuilder::on(&map_area)
-            .caption(title, ("sans-serif", 16))
             .margin(10)
             .margin_bottom(20)
             .x_label_area_size(45)
