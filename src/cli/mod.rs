@@ -194,11 +194,11 @@ pub enum Command {
     /// Print the manual page (roff), e.g. `verify man > verify.1 && man ./verify.1`.
     Man,
     /// Runs a study file (a command's options as TOML; see studies/): prints its plan
-    /// (runs, steps, core-hours, disk), then runs it; flags after `--` override its fields.
+    /// (runs, steps, core-hours, disk), then runs it; flags after the file override its fields.
     #[command(after_help = "Examples:\n  \
         verify run studies/fast-map.toml --dry-run      # the plan only\n  \
         verify run runs/shear-x/study.toml              # repeat a run (finished parts reused)\n  \
-        verify run studies/paper.toml -- --jobs 2       # a field overridden\n\n\
+        verify run studies/paper.toml --jobs 2          # a field overridden\n\n\
         Exit status: the command's (0 agree, 1 disagree, 2 error).")]
     Run(study::RunArgs),
 }

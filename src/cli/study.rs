@@ -11,7 +11,7 @@
 //! speeds = [0.002, 0.006, 0.02]
 //! ```
 //!
-//! `verify run STUDY.toml [--dry-run] [-- FLAGS...]` turns the file into the command's
+//! `verify run STUDY.toml [--dry-run] [FLAGS...]` turns the file into the command's
 //! arguments (flags after the file override its fields) and parses them with the same
 //! definitions as the command line, so a study is validated exactly as the flags are. Every
 //! command that writes a summary also writes `study.toml` beside it: the resolved options,
@@ -49,8 +49,9 @@ pub struct RunArgs {
     /// Print the plan (runs, steps, estimated core-hours and disk) and stop
     #[arg(long)]
     pub dry_run: bool,
-    /// Options that override the study's fields, as on the command line (after `--`)
-    #[arg(last = true, allow_hyphen_values = true)]
+    /// Options that override the study's fields, as on the command line (after the file, with
+    /// or without `--`)
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
     pub overrides: Vec<String>,
 }
 
@@ -370,7 +371,10 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
 }
 
 /// `verify run STUDY.toml`: prints the plan, then (unless --dry-run) runs the command.
-pub fn run_study(a: RunArgs) -> Result<Verdict> {
+pub fn run_study(mut a: RunArgs) -> Result<Verdict> {
+    // after the file everything is an override, but for a `--` separator and --dry-run
+    a.dry_run |= a.overrides.iter().any(|o| o == "--dry-run");
+    a.overrides.retain(|o| o != "--dry-run" && o != "--");
     let args = study_args(&a.study, &a.overrides)?;
     println!("study {}: verify {}", a.study.display(), args.join(" "));
     // clap's own message, first line, names the option (`--mu-r`: the field mu_r)
