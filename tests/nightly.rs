@@ -121,22 +121,7 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
     let console: Vec<&str> = stderr.lines().filter(|l| l.contains("CONSOLE")).collect();
     assert!(console.is_empty(), "console messages: {console:?}");
     let shot = root.join("report.png");
-    let o = browse(
-        &root.join("profile-shot"),
-        &report,
-        &[
-            &format!("--screenshot={}", shot.display()),
-            "--window-size=1400,2400",
-            "--hide-scrollbars",
-        ],
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let png = std::fs::read(&shot).unwrap();
-    assert!(
-        png.starts_with(b"\x89PNG") && png.len() > 50_000,
-        "{} bytes",
-        png.len()
-    );
+    common::screenshot(&root.join("profile-shot"), &report, &shot, "1400,2400");
     println!("screenshot of the report: {}", shot.display());
 }
 

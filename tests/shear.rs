@@ -187,25 +187,12 @@ fn ci_preset_agrees_with_liggghts() {
 fn native_only_resumes_and_writes_snapshots() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let args = [
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--strain",
-        "0.05",
-        "--native-only",
-        "--snapshot-every",
-        "5000",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    let o = verify(&args);
+    let run = || common::short_ci_shear(&out, &["--native-only", "--snapshot-every", "5000"]);
+    let o = run();
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     let vtk: Vec<_> = std::fs::read_dir(out.join("seed1/vtk")).unwrap().collect();
     assert!(vtk.len() >= 3, "expected VTK snapshots, got {}", vtk.len());
-    let o = verify(&args);
+    let o = run();
     assert!(
         text(&o).contains("native result found, reused"),
         "{}",
@@ -219,7 +206,7 @@ fn native_only_resumes_and_writes_snapshots() {
         .take(text_csv.lines().count() / 2)
         .collect();
     std::fs::write(&csv, half.join("\n") + "\n").unwrap();
-    let o = verify(&args);
+    let o = run();
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
     assert!(
         !text(&o).contains("native result found, reused"),

@@ -149,3 +149,29 @@ pub fn browse(
     }
     panic!("headless chromium hung 3 times on {url} (each killed after {BROWSER_TIMEOUT:?})");
 }
+
+/// A screenshot of `page` (headless Chromium, window `size` as "W,H") written to `shot`; panics
+/// unless it is a PNG of some substance (> 50 kB).
+pub fn screenshot(
+    profile: &std::path::Path,
+    page: &std::path::Path,
+    shot: &std::path::Path,
+    size: &str,
+) {
+    let o = browse(
+        profile,
+        page,
+        &[
+            &format!("--screenshot={}", shot.display()),
+            &format!("--window-size={size}"),
+            "--hide-scrollbars",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let png = std::fs::read(shot).unwrap();
+    assert!(
+        png.starts_with(b"\x89PNG") && png.len() > 50_000,
+        "{} bytes",
+        png.len()
+    );
+}
