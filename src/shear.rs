@@ -166,7 +166,7 @@ pub const CHECKPOINT_EVERY: std::time::Duration = std::time::Duration::from_secs
 pub const CHECKPOINT_NAME: &str = "native_checkpoint.bin";
 
 /// Version of the checkpoint format; a checkpoint of another version is not read.
-const CHECKPOINT_VERSION: u32 = 1;
+const CHECKPOINT_VERSION: u32 = 2;
 
 /// Everything a native run holds part way: the whole solver state (particles, pair and wall
 /// histories, neighbour list and its rebuild state, servo, plates and meshes, step), the rows

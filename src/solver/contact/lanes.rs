@@ -237,6 +237,14 @@ mod avx512 {
             F8(_mm512_i64gather_pd::<8>(idx, base as *const _))
         }
 
+        /// The 8 lanes from an array (lane `l` is `a[l]`).
+        #[inline(always)]
+        pub fn load(a: &[f64; 8]) -> F8 {
+            // SAFETY: an unaligned load of 64 bytes from a 64-byte array; F8 exists only
+            // inside avx512f code (module doc).
+            F8(unsafe { _mm512_loadu_pd(a.as_ptr()) })
+        }
+
         /// The 8 lanes as an array.
         #[inline(always)]
         pub fn to_array(self) -> [f64; 8] {

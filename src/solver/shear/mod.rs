@@ -108,8 +108,12 @@ pub struct ShearSim {
     rotation: Vec<[f64; 3]>,
     nl: NeighborList,
     xhold: Vec<[f64; 3]>,
-    /// Per pair, i's and j's force increments (zero when apart).
+    /// Per pair, i's and j's force increments (zero when apart): written by the parallel
+    /// pass, or when `record_pair_forces` (observers, tests); else stale.
     pair_force: Vec<(ForceData, ForceData)>,
+    /// Keep `pair_force` current at every force evaluation.
+    #[serde(skip)]
+    record_pair_forces: bool,
     /// Per particle, the sum of its pair increments in pair order ([`pairs::pass`]).
     acc: Vec<ForceData>,
     /// epsd_implicit: per pair the dashpot coefficient and contact normal.
@@ -241,6 +245,7 @@ impl ShearSim {
             nl: NeighborList::default(),
             xhold: packing.position.clone(),
             pair_force: Vec::new(),
+            record_pair_forces: false,
             acc: vec![ForceData::default(); n],
             pair_damp: Vec::new(),
             imp: vec![([0.0; 6], [0.0; 3]); n],
@@ -411,7 +416,8 @@ impl ShearSim {
         // pair forces: each pair writes its own history, force slot and state
         pairs::pass(
             self.kernel,
-            &mut self.nl.pairs,
+            &self.nl.pairs,
+            &mut self.nl.hist,
             &mut self.pair_force,
             &mut self.pair_damp,
             &mut self.acc,
@@ -424,6 +430,7 @@ impl ShearSim {
             },
             params,
             update_history,
+            self.record_pair_forces,
         );
         lap(&mut self.phases, |p| &mut p.pairs);
         // per-particle sums in pair order, then plate contacts
@@ -565,7 +572,7 @@ mod tests {
     fn state_bytes(s: &ShearSim) -> Vec<u8> {
         rmp_serde::to_vec(&(
             (&s.x, &s.v, &s.omega, &s.f, &s.torque, &s.rotation),
-            (&s.nl.pairs, &s.wall, &s.wall_cand),
+            (&s.nl.pairs, &s.nl.hist, &s.wall, &s.wall_cand),
             (&s.servo, &s.top, &s.bottom, s.top_force, s.bottom_force),
             (s.step, s.ago, s.mesh_rebuild_pending, &s.xhold),
         ))

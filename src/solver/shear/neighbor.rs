@@ -18,31 +18,23 @@ use crate::solver::contact::ContactHistory;
 /// contact, one per owner, each computed from its own rounded ghost coordinate, and reports the
 /// higher id's copy (`compute pair/gran/local` drops the other); this orientation makes the
 /// native pair that copy, operation for operation, so its history is the one LIGGGHTS dumps.
-/// `repr(C)`, 80 bytes: the batched pair pass gathers `shift` and `hist` at fixed offsets
-/// (checked below).
+/// 32 bytes: what the pair pass reads for every listed pair to decide whether it touches
+/// (the history, read only for touching pairs, is kept beside it in [`NeighborList::hist`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-#[repr(C)]
 pub struct Pair {
     pub i: u32,
     pub j: u32,
     /// Added to x_j to get the image of j nearest to i.
     pub shift: [f64; 3],
-    pub hist: ContactHistory,
 }
-
-/// Layout the AVX-512 pair pass relies on: `shift` at f64 slot 1, `hist.shear` at 4,
-/// `hist.r_torque` at 7, 10 slots per pair.
-const _: () = {
-    assert!(std::mem::size_of::<Pair>() == 80);
-    assert!(std::mem::offset_of!(Pair, shift) == 8);
-    assert!(std::mem::offset_of!(Pair, hist) == 32);
-    assert!(std::mem::offset_of!(ContactHistory, r_torque) == 24);
-};
 
 /// The list and the per-particle index of its pairs (CSR), for a deterministic reduction.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct NeighborList {
     pub pairs: Vec<Pair>,
+    /// The contact history of `pairs[k]` at `hist[k]` (two arrays: the touch test streams
+    /// 32 bytes per listed pair instead of 80).
+    pub hist: Vec<ContactHistory>,
     /// `start[p]..start[p+1]` indexes `entries` for particle p.
     pub start: Vec<u32>,
     /// (pair index, p is the pair's i) in increasing pair index.
@@ -170,14 +162,14 @@ impl NeighborList {
                     i: a,
                     j: b,
                     shift: s,
-                    hist: ContactHistory::default(),
                 });
             }
         }
         // carry histories of touching pairs over: both lists are sorted by (lower, higher)
         let key = |p: &Pair| (p.i.min(p.j), p.i.max(p.j));
+        let mut new_hist = vec![ContactHistory::default(); new_pairs.len()];
         let mut k = 0;
-        for (p, &touch) in new_pairs.iter_mut().zip(&touching) {
+        for ((p, &touch), nh) in new_pairs.iter().zip(&touching).zip(new_hist.iter_mut()) {
             if !touch {
                 continue;
             }
@@ -185,10 +177,10 @@ impl NeighborList {
                 k += 1;
             }
             if k < self.pairs.len() && key(&self.pairs[k]) == key(p) {
-                let h = self.pairs[k].hist;
+                let h = self.hist[k];
                 // a pair that started or stopped crossing the seam turned round: its history
                 // is relative (i against j), so it changes sign
-                p.hist = if self.pairs[k].i == p.i {
+                *nh = if self.pairs[k].i == p.i {
                     h
                 } else {
                     ContactHistory {
@@ -199,6 +191,7 @@ impl NeighborList {
             }
         }
         self.pairs = new_pairs;
+        self.hist = new_hist;
         // per-particle CSR
         let mut count = vec![0u32; n + 1];
         for p in &self.pairs {
@@ -313,9 +306,9 @@ mod tests {
         // across the seam the pair is oriented from the higher index (LIGGGHTS' reported copy)
         assert_eq!((nl.pairs[0].i, nl.pairs[0].j), (1, 0));
         assert_eq!(nl.pairs[0].shift, [1.0, 0.0, 0.0]);
-        nl.pairs[0].hist.shear = [1.0, 2.0, 3.0];
+        nl.hist[0].shear = [1.0, 2.0, 3.0];
         nl.build(&x, &r, 0.01, b);
-        assert_eq!(nl.pairs[0].hist.shear, [1.0, 2.0, 3.0]);
+        assert_eq!(nl.hist[0].shear, [1.0, 2.0, 3.0]);
         // particle 0 wrapped to the other side of the seam: the pair no longer crosses it,
         // turns round to (0, 1), and its relative history changes sign
         let mut wrapped = x.clone();
@@ -325,15 +318,15 @@ mod tests {
             (nl.pairs[0].i, nl.pairs[0].j, nl.pairs[0].shift),
             (0, 1, [0.0; 3])
         );
-        assert_eq!(nl.pairs[0].hist.shear, [-1.0, -2.0, -3.0]);
+        assert_eq!(nl.hist[0].shear, [-1.0, -2.0, -3.0]);
         nl.build(&x, &r, 0.01, b);
-        assert_eq!(nl.pairs[0].hist.shear, [1.0, 2.0, 3.0]);
+        assert_eq!(nl.hist[0].shear, [1.0, 2.0, 3.0]);
         // listed but not touching at the rebuild: history starts again from zero
         let mut apart = x.clone();
         apart[1] = [0.925, 0.5, 0.5];
         nl.build(&apart, &r, 0.01, b);
         assert_eq!(nl.pairs.len(), 1);
-        assert_eq!(nl.pairs[0].hist.shear, [0.0; 3]);
+        assert_eq!(nl.hist[0].shear, [0.0; 3]);
         // the CSR lists each pair for both particles
         assert_eq!(nl.start, vec![0, 1, 2, 2, 2]);
         let mut far = x.clone();

@@ -183,12 +183,12 @@ impl ShearSim {
             .build(&self.x, &self.radius, self.case.skin, self.box_);
         self.nl.builds = builds;
         let mut used = 0usize;
-        for p in &mut self.nl.pairs {
+        for (p, ph) in self.nl.pairs.iter().zip(self.nl.hist.iter_mut()) {
             if let Some(h) = st.pairs.get(&(p.i, p.j)) {
-                p.hist = *h;
+                *ph = *h;
                 used += 1;
             } else if let Some(h) = st.pairs.get(&(p.j, p.i)) {
-                p.hist = neg(*h);
+                *ph = neg(*h);
                 used += 1;
             }
         }
@@ -248,6 +248,7 @@ impl ShearSim {
     /// post_force_pgl: `shearupdate = 0`, end-of-step velocities and plate velocities).
     pub fn observe_contacts(&self) -> Result<(Vec<PairObservation>, Vec<WallObservation>)> {
         let mut probe = self.clone();
+        probe.record_pair_forces = true;
         probe.compute_forces(false)?;
         // LIGGGHTS reports a pair across a periodic seam from the copy owned by the higher
         // atom id, whose partner is a ghost atom: ghosts got their velocities at the last
@@ -255,7 +256,8 @@ impl ShearSim {
         // pair, see `neighbor::Pair`) enters with its force-time velocities.
         if let Some((fv, fw)) = &self.force_time_velocities {
             let (x, r, m) = (&probe.x, &probe.radius, &probe.mass);
-            for (p, out) in probe.nl.pairs.iter().zip(probe.pair_force.iter_mut()) {
+            let each = probe.nl.pairs.iter().zip(&probe.nl.hist);
+            for ((p, hist), out) in each.zip(probe.pair_force.iter_mut()) {
                 if p.shift == [0.0; 3] {
                     continue;
                 }
@@ -268,7 +270,7 @@ impl ShearSim {
                     (probe.v[i], fv[j]),
                     (probe.omega[i], fw[j]),
                 ) {
-                    let mut h = p.hist;
+                    let mut h = *hist;
                     let (fi, fj, _) = crate::solver::contact::surfaces_intersect(
                         &mut cd,
                         &probe.params,
@@ -283,17 +285,18 @@ impl ShearSim {
             .nl
             .pairs
             .iter()
+            .zip(&probe.nl.hist)
             .zip(&probe.pair_force)
             .zip(&probe.pair_damp)
             .filter(|(_, a)| a.contact != PairContact::Apart)
-            .map(|((p, (fi, fj)), a)| PairObservation {
+            .map(|(((p, hist), (fi, fj)), a)| PairObservation {
                 i: p.i,
                 j: p.j,
                 force_i: fi.delta_f,
                 torque_i: fi.delta_torque,
                 force_j: fj.delta_f,
                 torque_j: fj.delta_torque,
-                hist: p.hist,
+                hist: *hist,
                 periodic: p.shift != [0.0; 3],
                 sliding: a.sliding,
                 rolling_limit: a.contact == PairContact::RollingMobilised,
