@@ -417,6 +417,10 @@ impl ShearSim {
         pairs::pass(
             self.kernel,
             &self.nl.pairs,
+            pairs::Csr {
+                start: &self.nl.start,
+                entries: &self.nl.entries,
+            },
             &mut self.nl.hist,
             &mut self.pair_force,
             &mut self.pair_damp,
