@@ -24,7 +24,7 @@ pub use observe::{PlateRecord, Snapshot};
 pub use pairs::KernelPath;
 
 use super::contact::{ContactData, ForceData};
-use super::integrate::NveSphere;
+use super::integrate::{Kick, NveSphere};
 use super::material::{sphere_mass, PairParams};
 use super::trimesh::{TriContactRecord, TriMesh};
 use super::vec3::V3;
@@ -105,6 +105,9 @@ pub struct ShearSim {
     torque: Vec<[f64; 3]>,
     pub radius: Vec<f64>,
     mass: Vec<f64>,
+    /// Per particle, nve/sphere's half-kick factors (made once: radius, mass and dt are
+    /// fixed for the life of the run).
+    kick: Vec<Kick>,
     rotation: Vec<[f64; 3]>,
     nl: NeighborList,
     xhold: Vec<[f64; 3]>,
@@ -212,7 +215,7 @@ impl ShearSim {
         let rho = case.material.density;
         // radius = 0.5 * diameter as read_data computes it; mass as atom_vec_sphere does.
         let radius: Vec<f64> = packing.radius.iter().map(|r| 0.5 * (2.0 * r)).collect();
-        let mass = radius.iter().map(|r| sphere_mass(*r, rho)).collect();
+        let mass: Vec<f64> = radius.iter().map(|r| sphere_mass(*r, rho)).collect();
         let bottom = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
         let top = Plate::new(Side::Top, packing.top_y, &case.plates, case.box_x);
         let lo = [0.0, packing.box_y_lo, 0.0];
@@ -224,6 +227,11 @@ impl ShearSim {
         let top_orig = meshes[1].tris.iter().map(|t| t.nodes).collect();
         let com = [0.5 * case.box_x, packing.top_y, 0.5 * case.box_z];
         let nve = NveSphere::new(case.dt);
+        let kick = radius
+            .iter()
+            .zip(&mass)
+            .map(|(r, m)| nve.kick(*r, *m))
+            .collect();
         ShearSim {
             case: case.clone(),
             // the one time step: nve/sphere's dtv; the kernels' copy is set from it here
@@ -241,6 +249,7 @@ impl ShearSim {
             torque: vec![[0.0; 3]; n],
             radius,
             mass,
+            kick,
             rotation: vec![[0.0; 3]; n],
             nl: NeighborList::default(),
             xhold: packing.position.clone(),
@@ -345,7 +354,7 @@ impl ShearSim {
         }
         let nve = self.nve;
         let dt = self.nve.dtv;
-        let (radius, mass) = (&self.radius, &self.mass);
+        let kick = &self.kick;
         self.x
             .par_iter_mut()
             .zip(self.v.par_iter_mut())
@@ -355,7 +364,7 @@ impl ShearSim {
             .with_min_len(LIGHT_CHUNK)
             .enumerate()
             .for_each(|(i, ((((x, v), w), (f, t)), rot))| {
-                nve.initial(x, v, w, *f, *t, radius[i], mass[i]);
+                nve.initial_kicked(x, v, w, *f, *t, kick[i]);
                 for k in 0..3 {
                     rot[k] += w[k] * dt;
                 }
@@ -376,15 +385,14 @@ impl ShearSim {
             v.clone_from(&self.v);
             w.clone_from(&self.omega);
         }
-        let (radius, mass) = (&self.radius, &self.mass);
-        self.x
-            .par_iter()
-            .zip(self.v.par_iter_mut())
+        let kick = &self.kick;
+        self.v
+            .par_iter_mut()
             .zip(self.omega.par_iter_mut())
             .zip(self.f.par_iter().zip(self.torque.par_iter()))
+            .zip(kick.par_iter())
             .with_min_len(LIGHT_CHUNK)
-            .enumerate()
-            .for_each(|(i, (((_, v), w), (f, t)))| nve.finish(v, w, *f, *t, radius[i], mass[i]));
+            .for_each(|(((v, w), (f, t)), k)| nve.finish_kicked(v, w, *f, *t, *k));
         if self.implicit {
             self.implicit_rotation();
         }
