@@ -276,7 +276,8 @@ impl Plan {
         );
         println!(
             "  (rates of `verify bench` on the reference machine's dense state: native {:.2e}, LIGGGHTS {:.2e} \
-             particle-steps/s per core; whole fast-preset runs took 1.1-2x this with two jobs sharing 2 cores)",
+             particle-steps/s per core; the e = 1 fast map's runs took 1.1x this on a free core, up to 8x \
+             with development and CI sharing the 2 cores)",
             rate(Engine::Native),
             rate(Engine::Liggghts)
         );
