@@ -112,7 +112,8 @@ pub struct ShearSim {
     nl: NeighborList,
     xhold: Vec<[f64; 3]>,
     /// Per pair, i's and j's force increments (zero when apart): written by the parallel
-    /// pass, or when `record_pair_forces` (observers, tests); else stale.
+    /// and the scalar pass, or when `record_pair_forces` (observers, tests); else stale or
+    /// empty (never allocated by a serial AVX-512 run).
     pair_force: Vec<(ForceData, ForceData)>,
     /// Keep `pair_force` current at every force evaluation.
     #[serde(skip)]
@@ -324,7 +325,6 @@ impl ShearSim {
     /// Sizes the per-pair buffers for the current pair list (after a build).
     fn size_pair_buffers(&mut self) {
         let np = self.nl.pairs.len();
-        self.pair_force.resize(np, Default::default());
         self.pair_damp.resize(np, PairAux::default());
     }
 

@@ -118,7 +118,7 @@ pub(super) fn pass(
     pairs: &[Pair],
     csr: Csr,
     hist: &mut [ContactHistory],
-    out: &mut [(ForceData, ForceData)],
+    out: &mut Vec<(ForceData, ForceData)>,
     aux: &mut [PairAux],
     acc: &mut [ForceData],
     s: Particles,
@@ -127,9 +127,14 @@ pub(super) fn pass(
     record: bool,
 ) {
     let np = pairs.len();
-    assert!(acc.len() == s.x.len() && aux.len() == np && out.len() == np && hist.len() == np);
+    assert!(acc.len() == s.x.len() && aux.len() == np && hist.len() == np);
     acc.fill(ForceData::default());
     let serial = rayon::current_num_threads() == 1;
+    // `out` is allocated only when written (the serial AVX-512 pass without `record` never
+    // does: 96 bytes per listed pair, about 430 B per particle, not held)
+    if record || !serial || path == KernelPath::Scalar {
+        out.resize(np, Default::default());
+    }
     match path {
         KernelPath::Scalar if serial => {
             let each = pairs.iter().zip(hist.iter_mut());
@@ -154,11 +159,13 @@ pub(super) fn pass(
                 );
                 let c = avx512::CHUNK;
                 if serial {
-                    let chunks = pairs
-                        .chunks(c)
-                        .zip(hist.chunks_mut(c))
-                        .zip(out.chunks_mut(c).zip(aux.chunks_mut(c)));
-                    for ((p, h), (o, a)) in chunks {
+                    let chunks = pairs.chunks(c).zip(hist.chunks_mut(c));
+                    for (k, ((p, h), a)) in chunks.zip(aux.chunks_mut(c)).enumerate() {
+                        let o = if record {
+                            &mut out[k * c..k * c + p.len()]
+                        } else {
+                            &mut []
+                        };
                         // SAFETY: avx512f/dq checked above; the chunks have equal lengths <=
                         // CHUNK; every particle index of a pair is below the particle count.
                         unsafe {
