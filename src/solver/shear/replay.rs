@@ -114,14 +114,13 @@ impl ShearSim {
         let mut w = prev.omega.clone();
         for i in 0..v.len() {
             let mut x = prev.x[i];
-            nve.initial(
+            nve.initial_kicked(
                 &mut x,
                 &mut v[i],
                 &mut w[i],
                 prev.f[i],
                 prev.torque[i],
-                self.radius[i],
-                self.mass[i],
+                self.kick[i],
             );
         }
         self.force_time_velocities = Some((v, w));
