@@ -11,6 +11,7 @@ use clap::{Args, ValueEnum};
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum KernelArg {
     Scalar,
+    Avx2,
     Avx512,
 }
 
@@ -18,6 +19,7 @@ impl From<KernelArg> for KernelPath {
     fn from(k: KernelArg) -> Self {
         match k {
             KernelArg::Scalar => KernelPath::Scalar,
+            KernelArg::Avx2 => KernelPath::Avx2,
             KernelArg::Avx512 => KernelPath::Avx512,
         }
     }
@@ -64,11 +66,7 @@ pub fn bench(a: BenchArgs) -> Result<Verdict> {
         threads: a.threads.clone(),
         kernels: if a.kernels.is_empty() {
             // every path this CPU runs, the fastest last
-            let mut k = vec![KernelPath::Scalar];
-            if KernelPath::detect() != KernelPath::Scalar {
-                k.push(KernelPath::detect());
-            }
-            k
+            KernelPath::available()
         } else {
             a.kernels.iter().map(|&k| k.into()).collect()
         },

@@ -178,7 +178,7 @@ pub enum Command {
     Replay(replay::ReplayArgs),
     /// Throughput of both codes on the same dense shear state (particle-steps per second).
     #[command(after_help = "Examples:\n  \
-        verify bench --preset fast --steps 10000 --threads 1,2 --kernels scalar,avx512\n  \
+        verify bench --preset fast --steps 10000 --threads 1,2 --kernels scalar,avx2,avx512\n  \
         verify bench --preset fast --particles 250000 --native-only")]
     Bench(bench::BenchArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).

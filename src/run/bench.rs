@@ -155,7 +155,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         return Err(Error::invalid(
             "--kernels",
             "(none)",
-            "scalar and/or avx512",
+            "one or more of scalar, avx2, avx512",
         ));
     }
     for k in &a.kernels {
@@ -326,7 +326,10 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let mut paper_run_hours = Vec::new();
     for r in &rows {
         paper_run_hours.push((
-            format!("{} x{}", r.code, r.workers),
+            match r.kernel {
+                Some(k) => format!("{} x{} ({})", r.code, r.workers, k.name()),
+                None => format!("{} x{}", r.code, r.workers),
+            },
             paper_ps / r.particle_steps_per_s / 3600.0,
         ));
     }

@@ -1,9 +1,10 @@
 //! Lane arithmetic for batched contact kernels: one generic kernel body, instantiated for a
-//! single contact (`f64`, masks `bool`) and for 8 contacts at once (AVX-512, [`F8`]).
+//! single contact (`f64`, masks `bool`), for 8 contacts at once (AVX-512, [`F8`]) and for 4
+//! (AVX2, [`F4`], on CPUs without AVX-512).
 //!
 //! Bit-identity with the scalar kernels rests on three facts, each kept here:
 //! - every operation is one IEEE operation per lane in the scalar order: `+ - * /` and `sqrt`
-//!   are correctly rounded in AVX-512 as in scalar SSE2, and nothing is fused (no FMA: Rust
+//!   are correctly rounded in AVX-512 and AVX as in scalar SSE2, and nothing is fused (no FMA: Rust
 //!   never contracts, and these wrappers call the separate add and multiply instructions);
 //! - negation and `abs` flip or clear the sign bit, as Rust's `-x` and `f64::abs` do (not
 //!   `0 - x`, which differs for zeros);
@@ -262,6 +263,137 @@ mod avx512 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+pub use avx2::{F4, M4};
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    //! 4 lanes of f64 in one AVX register (the path of CPUs with AVX2 but without AVX-512).
+    //! As for [`super::F8`]: a value of [`F4`] is made only inside a function compiled with
+    //! `avx,avx2`, entered after `is_x86_feature_detected!("avx2")`; the wrappers are
+    //! `#[inline(always)]`. A mask is the comparison's result, all ones or all zeros per lane.
+    use super::{Lanes, Mask};
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Div, Mul, Neg, Sub};
+
+    #[derive(Clone, Copy)]
+    pub struct F4(pub __m256d);
+
+    #[derive(Clone, Copy)]
+    pub struct M4(pub __m256d);
+
+    impl Mask for M4 {
+        #[inline(always)]
+        fn and(self, o: Self) -> Self {
+            // SAFETY: M4 exists only inside avx code (module doc).
+            M4(unsafe { _mm256_and_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn or(self, o: Self) -> Self {
+            M4(unsafe { _mm256_or_pd(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn not(self) -> Self {
+            M4(unsafe { _mm256_xor_pd(self.0, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))) })
+        }
+        #[inline(always)]
+        fn any(self) -> bool {
+            unsafe { _mm256_movemask_pd(self.0) != 0 }
+        }
+    }
+
+    macro_rules! binop {
+        ($tr:ident, $f:ident, $intr:ident) => {
+            impl $tr for F4 {
+                type Output = F4;
+                #[inline(always)]
+                fn $f(self, o: F4) -> F4 {
+                    // SAFETY: F4 exists only inside avx code (module doc).
+                    F4(unsafe { $intr(self.0, o.0) })
+                }
+            }
+        };
+    }
+    binop!(Add, add, _mm256_add_pd);
+    binop!(Sub, sub, _mm256_sub_pd);
+    binop!(Mul, mul, _mm256_mul_pd);
+    binop!(Div, div, _mm256_div_pd);
+
+    impl Neg for F4 {
+        type Output = F4;
+        #[inline(always)]
+        fn neg(self) -> F4 {
+            // SAFETY: as above. Flips the sign bit, as Rust's `-x`.
+            F4(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
+        }
+    }
+
+    impl Lanes for F4 {
+        type M = M4;
+        #[inline(always)]
+        fn splat(v: f64) -> Self {
+            F4(unsafe { _mm256_set1_pd(v) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            F4(unsafe { _mm256_sqrt_pd(self.0) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            // clears the sign bit, as `f64::abs`
+            F4(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
+        }
+        #[inline(always)]
+        fn gt(self, o: Self) -> M4 {
+            M4(unsafe { _mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn ge(self, o: Self) -> M4 {
+            M4(unsafe { _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn le(self, o: Self) -> M4 {
+            M4(unsafe { _mm256_cmp_pd::<_CMP_LE_OQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn ne(self, o: Self) -> M4 {
+            M4(unsafe { _mm256_cmp_pd::<_CMP_NEQ_UQ>(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn select(m: M4, t: Self, f: Self) -> Self {
+            // blendv(a, b, m): b where the mask lane's sign bit is set, else a
+            F4(unsafe { _mm256_blendv_pd(f.0, t.0, m.0) })
+        }
+    }
+
+    impl F4 {
+        /// The 4 lanes from a slice's first 4 values (lane `l` is `a[l]`).
+        #[inline(always)]
+        pub fn load(a: &[f64]) -> F4 {
+            assert!(a.len() >= 4);
+            // SAFETY: an unaligned load of 32 bytes from at least 4 values; F4 exists only
+            // inside avx code (module doc).
+            F4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+        }
+
+        /// The 4 lanes into a slice's first 4 values.
+        #[inline(always)]
+        pub fn store(self, a: &mut [f64]) {
+            assert!(a.len() >= 4);
+            // SAFETY: an unaligned store of 32 bytes into at least 4 values.
+            unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
+        }
+    }
+
+    impl M4 {
+        /// One bit per lane (lane 0 lowest).
+        #[inline(always)]
+        pub fn bits(self) -> u8 {
+            (unsafe { _mm256_movemask_pd(self.0) }) as u8
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -272,6 +404,51 @@ mod tests {
         assert!(f64::NAN.ne(f64::NAN));
         assert_eq!((-0.0f64).abs().to_bits(), 0.0f64.to_bits());
         assert_eq!(<f64 as Lanes>::select(true, 1.0, 2.0), 1.0);
+    }
+
+    /// Every lane operation against the scalar one, lane by lane, bit for bit, on values
+    /// with signed zeros, a NaN, subnormal-range products and an infinity.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    fn check_lanes<L: Lanes>(
+        width: usize,
+        load: impl Fn(&[f64]) -> L,
+        store: impl Fn(L) -> Vec<f64>,
+        mask_bits: impl Fn(L::M) -> u8,
+    ) {
+        let a = [1.0, -0.0, 0.0, f64::NAN, 3.5e-300, -7.25, 1e300, 2.0];
+        let b = [3.0, 0.0, -0.0, 1.0, 1e-20, 0.1, 1e-300, f64::INFINITY];
+        for at in (0..8).step_by(width) {
+            let (a, b) = (&a[at..at + width], &b[at..at + width]);
+            let (va, vb) = (load(a), load(b));
+            let bits = |v: L| store(v).iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let each = |f: fn(f64, f64) -> f64| {
+                (0..width)
+                    .map(|l| f(a[l], b[l]).to_bits())
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(va + vb), each(|x, y| x + y));
+            assert_eq!(bits(va - vb), each(|x, y| x - y));
+            assert_eq!(bits(va * vb), each(|x, y| x * y));
+            assert_eq!(bits(va / vb), each(|x, y| x / y));
+            assert_eq!(bits(-va), each(|x, _| -x));
+            assert_eq!(bits(va.abs()), each(|x, _| x.abs()));
+            assert_eq!(bits(va.sqrt()), each(|x, _| x.sqrt()));
+            let m = |mk: L::M, f: fn(f64, f64) -> bool| {
+                (0..width).all(|l| ((mask_bits(mk) >> l) & 1 == 1) == f(a[l], b[l]))
+            };
+            assert!(m(va.gt(vb), |x, y| x > y));
+            assert!(m(va.ge(vb), |x, y| x >= y));
+            assert!(m(va.le(vb), |x, y| x <= y));
+            assert!(m(va.ne(vb), |x, y| x != y));
+            assert!(m(va.gt(vb).not(), |x, y| x.partial_cmp(&y)
+                != Some(std::cmp::Ordering::Greater)));
+            assert!(m(va.gt(vb).and(va.ne(vb)), |x, y| x > y && x != y));
+            assert!(m(va.le(vb).or(va.ne(vb)), |x, y| x <= y || x != y));
+            assert_eq!(va.ne(va).any(), a.iter().any(|x| x.is_nan()));
+            let s = L::select(va.gt(vb), va, vb);
+            assert_eq!(bits(s), each(|x, y| if x > y { x } else { y }));
+        }
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -286,36 +463,37 @@ mod tests {
 
         #[target_feature(enable = "avx512f")]
         unsafe fn check() {
-            let a = [1.0, -0.0, 0.0, f64::NAN, 3.5e-300, -7.25, 1e300, 2.0];
-            let b = [3.0, 0.0, -0.0, 1.0, 1e-20, 0.1, 1e-300, f64::INFINITY];
-            let (va, vb) = (
-                F8(std::arch::x86_64::_mm512_loadu_pd(a.as_ptr())),
-                F8(std::arch::x86_64::_mm512_loadu_pd(b.as_ptr())),
+            check_lanes(
+                8,
+                |a| F8::load(a.try_into().unwrap()),
+                |v| v.to_array().to_vec(),
+                |m| m.bits(),
             );
-            let bits = |v: F8| v.to_array().map(f64::to_bits);
-            let each = |f: fn(f64, f64) -> f64| {
-                let mut r = [0u64; 8];
-                for l in 0..8 {
-                    r[l] = f(a[l], b[l]).to_bits();
-                }
-                r
-            };
-            assert_eq!(bits(va + vb), each(|x, y| x + y));
-            assert_eq!(bits(va - vb), each(|x, y| x - y));
-            assert_eq!(bits(va * vb), each(|x, y| x * y));
-            assert_eq!(bits(va / vb), each(|x, y| x / y));
-            assert_eq!(bits(-va), each(|x, _| -x));
-            assert_eq!(bits(va.abs()), each(|x, _| x.abs()));
-            assert_eq!(bits(va.sqrt()), each(|x, _| x.sqrt()));
-            let m = |mk: M8, f: fn(f64, f64) -> bool| {
-                (0..8).all(|l| ((mk.bits() >> l) & 1 == 1) == f(a[l], b[l]))
-            };
-            assert!(m(va.gt(vb), |x, y| x > y));
-            assert!(m(va.ge(vb), |x, y| x >= y));
-            assert!(m(va.le(vb), |x, y| x <= y));
-            assert!(m(va.ne(vb), |x, y| x != y));
-            let s = F8::select(va.gt(vb), va, vb);
-            assert_eq!(bits(s), each(|x, y| if x > y { x } else { y }));
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_lanes_give_the_scalar_bits() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("avx2 not available: the AVX2 lanes are not exercised here");
+            return;
+        }
+        // SAFETY: avx2 detected above.
+        unsafe { check() }
+
+        #[target_feature(enable = "avx,avx2")]
+        unsafe fn check() {
+            check_lanes(
+                4,
+                F4::load,
+                |v| {
+                    let mut a = [0.0; 4];
+                    v.store(&mut a);
+                    a.to_vec()
+                },
+                |m| m.bits(),
+            );
         }
     }
 }

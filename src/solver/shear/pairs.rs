@@ -4,8 +4,9 @@
 //!   headers one contact at a time (also what the contact cases and the walls use);
 //! - [`KernelPath::Avx512`]: [`batch::pair`] on 8 touching pairs at once (found by a scalar
 //!   touch test over the listed pairs), their particles' data copied into lane arrays, the
-//!   results written back per pair.
-//!   Chosen at run time where the CPU has AVX-512F and DQ.
+//!   results written back per pair. Chosen at run time where the CPU has AVX-512F and DQ;
+//! - [`KernelPath::Avx2`]: the same pass with the 8 staged lanes evaluated as two AVX
+//!   vectors of 4 (CPUs with AVX2 but without AVX-512).
 //!
 //! [`batch::pair`]: crate::solver::contact::batch::pair
 //!
@@ -30,6 +31,8 @@ pub enum KernelPath {
     Scalar,
     /// 8 contacts per AVX-512 vector ([`batch::pair`]).
     Avx512,
+    /// 4 contacts per AVX vector ([`batch::pair`]), on CPUs with AVX2 but without AVX-512.
+    Avx2,
 }
 
 impl KernelPath {
@@ -37,18 +40,38 @@ impl KernelPath {
     pub fn detect() -> Self {
         if avx512_available() {
             KernelPath::Avx512
+        } else if avx2_available() {
+            KernelPath::Avx2
         } else {
             KernelPath::Scalar
         }
     }
 
+    /// Every path this CPU runs, the scalar one first.
+    pub fn available() -> Vec<Self> {
+        [KernelPath::Scalar, KernelPath::Avx2, KernelPath::Avx512]
+            .into_iter()
+            .filter(|k| k.runs_here())
+            .collect()
+    }
+
+    /// This CPU has the path's instructions.
+    pub fn runs_here(self) -> bool {
+        match self {
+            KernelPath::Scalar => true,
+            KernelPath::Avx512 => avx512_available(),
+            KernelPath::Avx2 => avx2_available(),
+        }
+    }
+
     /// `path` if this CPU can run it, else an error naming `field`.
     pub fn checked(self, field: &str) -> Result<Self> {
-        if self == KernelPath::Avx512 && !avx512_available() {
+        if !self.runs_here() {
+            let names: Vec<_> = Self::available().iter().map(|k| k.name()).collect();
             return Err(Error::invalid(
                 field,
-                "avx512",
-                "scalar on this CPU (it lacks AVX-512F or AVX-512DQ)",
+                self.name(),
+                format!("one of {} on this CPU", names.join(", ")),
             ));
         }
         Ok(self)
@@ -58,7 +81,19 @@ impl KernelPath {
         match self {
             KernelPath::Scalar => "scalar",
             KernelPath::Avx512 => "avx512",
+            KernelPath::Avx2 => "avx2",
         }
+    }
+}
+
+fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }
 
@@ -150,14 +185,15 @@ pub(super) fn pass(
             .zip(out.par_iter_mut().zip(aux.par_iter_mut()))
             .with_min_len(HEAVY_CHUNK)
             .for_each(|((p, h), (o, a))| *o = scalar_one(p, h, a, s, params, update_history)),
-        KernelPath::Avx512 => {
+        KernelPath::Avx512 | KernelPath::Avx2 => {
             #[cfg(target_arch = "x86_64")]
             {
                 assert!(
-                    avx512_available(),
-                    "the AVX-512 path needs avx512f and avx512dq"
+                    path.runs_here(),
+                    "the {} path on a CPU without it",
+                    path.name()
                 );
-                let c = avx512::CHUNK;
+                let c = simd::CHUNK;
                 if serial {
                     let chunks = pairs.chunks(c).zip(hist.chunks_mut(c));
                     for (k, ((p, h), a)) in chunks.zip(aux.chunks_mut(c)).enumerate() {
@@ -166,21 +202,12 @@ pub(super) fn pass(
                         } else {
                             &mut []
                         };
-                        // SAFETY: avx512f/dq checked above; the chunks have equal lengths <=
-                        // CHUNK; every particle index of a pair is below the particle count.
+                        let sum = Some(&mut *acc);
+                        // SAFETY: the path's target features checked above; the chunks have
+                        // equal lengths <= CHUNK; every particle index of a pair is in bounds.
                         unsafe {
-                            avx512::chunk(
-                                p,
-                                h,
-                                o,
-                                a,
-                                Some(&mut *acc),
-                                record,
-                                s,
-                                params,
-                                update_history,
-                            )
-                        }
+                            simd::chunk_on(path, p, h, o, a, sum, record, s, params, update_history)
+                        };
                     }
                     return;
                 }
@@ -190,11 +217,13 @@ pub(super) fn pass(
                     .zip(out.par_chunks_mut(c).zip(aux.par_chunks_mut(c)))
                     .for_each(|((p, h), (o, a))| {
                         // SAFETY: as above.
-                        unsafe { avx512::chunk(p, h, o, a, None, true, s, params, update_history) }
+                        unsafe {
+                            simd::chunk_on(path, p, h, o, a, None, true, s, params, update_history)
+                        }
                     });
             }
             #[cfg(not(target_arch = "x86_64"))]
-            unreachable!("KernelPath::Avx512 is only selected on x86_64")
+            unreachable!("the SIMD paths are only selected on x86_64")
         }
     }
     // Each particle's sum over its pairs in increasing pair index (the CSR `entries` are in
@@ -262,12 +291,12 @@ fn scalar_one(
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx512 {
+mod simd {
     use super::super::neighbor::Pair;
     use super::super::{PairAux, PairContact};
-    use super::Particles;
+    use super::{KernelPath, Particles};
     use crate::solver::contact::batch::{self, PairIn};
-    use crate::solver::contact::lanes::F8;
+    use crate::solver::contact::lanes::{F4, F8};
     use crate::solver::contact::{ContactHistory, ForceData};
     use crate::solver::material::PairParams;
 
@@ -282,7 +311,7 @@ mod avx512 {
     /// when the 30 gathers per group of 8 touching pairs and the 13 per group of 8 listed
     /// pairs of the touch test were replaced by these copies and a scalar touch test.
     #[repr(C, align(64))]
-    struct Stage([[f64; 8]; 31]);
+    pub(super) struct Stage([[f64; 8]; 31]);
 
     const XI: usize = 0;
     const XJ: usize = 3;
@@ -305,30 +334,250 @@ mod avx512 {
             self.0[at + 1][l] = v[1];
             self.0[at + 2][l] = v[2];
         }
+    }
+
+    /// The outputs of 8 lanes as arrays (lane `l` of component `c` at `[c][l]`) and the
+    /// masks as bits (lane `l` at bit `l`).
+    pub(super) struct Out8 {
+        fi: [[f64; 8]; 3],
+        ti: [[f64; 8]; 3],
+        fj: [[f64; 8]; 3],
+        tj: [[f64; 8]; 3],
+        shear: [[f64; 8]; 3],
+        r_torque: [[f64; 8]; 3],
+        en: [[f64; 8]; 3],
+        damping: [f64; 8],
+        touch: u8,
+        mobilised: u8,
+        sliding: u8,
+    }
+
+    /// A SIMD width evaluating 8 staged lanes through [`batch::pair`].
+    pub(super) trait Eval8 {
+        /// # Safety
+        /// The target features of the implementing path.
+        unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8;
+    }
+
+    /// AVX-512: the 8 lanes in one vector.
+    pub(super) struct Avx512;
+    /// AVX2: the 8 lanes as two vectors of 4, lanes 0-3 then 4-7.
+    pub(super) struct Avx2;
+
+    impl Eval8 for Avx512 {
         #[inline(always)]
-        fn one(&self, at: usize) -> F8 {
-            F8::load(&self.0[at])
+        unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8 {
+            let one = |at: usize| F8::load(&st.0[at]);
+            let three = |at: usize| [one(at), one(at + 1), one(at + 2)];
+            let inp = PairIn {
+                xi: three(XI),
+                xj: three(XJ),
+                shift: three(SHIFT),
+                radi: one(RADI),
+                radj: one(RADJ),
+                mi: one(MI),
+                mj: one(MJ),
+                vi: three(VI),
+                vj: three(VJ),
+                wi: three(WI),
+                wj: three(WJ),
+                shear: three(SHEAR),
+                r_torque: three(RTORQUE),
+            };
+            let o = batch::pair(&inp, params, update_history);
+            let arr = |v: [F8; 3]| [v[0].to_array(), v[1].to_array(), v[2].to_array()];
+            Out8 {
+                fi: arr(o.fi),
+                ti: arr(o.ti),
+                fj: arr(o.fj),
+                tj: arr(o.tj),
+                shear: arr(o.shear),
+                r_torque: arr(o.r_torque),
+                en: arr(o.en),
+                damping: o.damping.to_array(),
+                touch: o.touch.bits(),
+                mobilised: o.mobilised.bits(),
+                sliding: o.sliding.bits(),
+            }
         }
+    }
+
+    impl Eval8 for Avx2 {
         #[inline(always)]
-        fn three(&self, at: usize) -> [F8; 3] {
-            [self.one(at), self.one(at + 1), self.one(at + 2)]
+        unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8 {
+            let mut r = Out8 {
+                fi: [[0.0; 8]; 3],
+                ti: [[0.0; 8]; 3],
+                fj: [[0.0; 8]; 3],
+                tj: [[0.0; 8]; 3],
+                shear: [[0.0; 8]; 3],
+                r_torque: [[0.0; 8]; 3],
+                en: [[0.0; 8]; 3],
+                damping: [0.0; 8],
+                touch: 0,
+                mobilised: 0,
+                sliding: 0,
+            };
+            for half in [0, 4] {
+                let one = |at: usize| F4::load(&st.0[at][half..half + 4]);
+                let three = |at: usize| [one(at), one(at + 1), one(at + 2)];
+                let inp = PairIn {
+                    xi: three(XI),
+                    xj: three(XJ),
+                    shift: three(SHIFT),
+                    radi: one(RADI),
+                    radj: one(RADJ),
+                    mi: one(MI),
+                    mj: one(MJ),
+                    vi: three(VI),
+                    vj: three(VJ),
+                    wi: three(WI),
+                    wj: three(WJ),
+                    shear: three(SHEAR),
+                    r_torque: three(RTORQUE),
+                };
+                let o = batch::pair(&inp, params, update_history);
+                let put = |dst: &mut [[f64; 8]; 3], v: [F4; 3]| {
+                    for c in 0..3 {
+                        v[c].store(&mut dst[c][half..half + 4]);
+                    }
+                };
+                put(&mut r.fi, o.fi);
+                put(&mut r.ti, o.ti);
+                put(&mut r.fj, o.fj);
+                put(&mut r.tj, o.tj);
+                put(&mut r.shear, o.shear);
+                put(&mut r.r_torque, o.r_torque);
+                put(&mut r.en, o.en);
+                o.damping.store(&mut r.damping[half..half + 4]);
+                r.touch |= o.touch.bits() << half;
+                r.mobilised |= o.mobilised.bits() << half;
+                r.sliding |= o.sliding.bits() << half;
+            }
+            r
         }
+    }
+
+    /// [`chunk`] on `path`'s lanes.
+    ///
+    /// # Safety
+    /// `path` is [`KernelPath::Avx512`] or [`KernelPath::Avx2`] and runs on this CPU; the
+    /// rest as [`chunk`].
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn chunk_on(
+        path: KernelPath,
+        pairs: &[Pair],
+        hist: &mut [ContactHistory],
+        out: &mut [(ForceData, ForceData)],
+        aux: &mut [PairAux],
+        sum: Option<&mut [ForceData]>,
+        record: bool,
+        s: Particles,
+        params: &PairParams,
+        update_history: bool,
+    ) {
+        match path {
+            KernelPath::Avx512 => chunk_avx512(
+                pairs,
+                hist,
+                out,
+                aux,
+                sum,
+                record,
+                s,
+                params,
+                update_history,
+            ),
+            KernelPath::Avx2 => chunk_avx2(
+                pairs,
+                hist,
+                out,
+                aux,
+                sum,
+                record,
+                s,
+                params,
+                update_history,
+            ),
+            KernelPath::Scalar => unreachable!("the scalar path has no SIMD chunk"),
+        }
+    }
+
+    /// [`chunk`] with AVX-512 lanes.
+    ///
+    /// # Safety
+    /// avx512f and avx512dq; the rest as [`chunk`].
+    #[target_feature(enable = "avx512f,avx512dq")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn chunk_avx512(
+        pairs: &[Pair],
+        hist: &mut [ContactHistory],
+        out: &mut [(ForceData, ForceData)],
+        aux: &mut [PairAux],
+        sum: Option<&mut [ForceData]>,
+        record: bool,
+        s: Particles,
+        params: &PairParams,
+        update_history: bool,
+    ) {
+        chunk::<Avx512>(
+            pairs,
+            hist,
+            out,
+            aux,
+            sum,
+            record,
+            s,
+            params,
+            update_history,
+        )
+    }
+
+    /// [`chunk`] with AVX2 lanes.
+    ///
+    /// # Safety
+    /// avx and avx2; the rest as [`chunk`].
+    #[target_feature(enable = "avx,avx2")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn chunk_avx2(
+        pairs: &[Pair],
+        hist: &mut [ContactHistory],
+        out: &mut [(ForceData, ForceData)],
+        aux: &mut [PairAux],
+        sum: Option<&mut [ForceData]>,
+        record: bool,
+        s: Particles,
+        params: &PairParams,
+        update_history: bool,
+    ) {
+        chunk::<Avx2>(
+            pairs,
+            hist,
+            out,
+            aux,
+            sum,
+            record,
+            s,
+            params,
+            update_history,
+        )
     }
 
     /// The pairs of one chunk: first which of them touch (one at a time, the kernel's own
     /// test [`batch::touching`] on the same operations, so the same answer); then the
-    /// touching ones, 8 at a time, through [`batch::pair`], their increments added to `sum`
+    /// touching ones, 8 at a time, through [`batch::pair`] (8 lanes of `E`), their increments added to `sum`
     /// in pair order when given (the serial pass) and written to `out` when `record` (the
     /// parallel pass, which sums afterwards, and observers); the apart pairs' `aux` cleared
     /// (and their `out` slots when `record`). A last group's missing lanes repeat earlier
     /// pairs of the chunk and are not written back.
     ///
     /// # Safety
-    /// avx512f and avx512dq; `pairs`, `out` (when `record`), `aux` of equal length <=
-    /// [`CHUNK`]; particle indices in bounds of `s`.
-    #[target_feature(enable = "avx512f,avx512dq")]
+    /// The target features of `E` (entered through [`chunk_avx512`], [`chunk_avx2`]);
+    /// `pairs`, `out` (when `record`), `aux` of equal length <= [`CHUNK`]; particle indices
+    /// in bounds of `s`.
+    #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    pub(super) unsafe fn chunk(
+    unsafe fn chunk<E: Eval8>(
         pairs: &[Pair],
         hist: &mut [ContactHistory],
         out: &mut [(ForceData, ForceData)],
@@ -393,42 +642,22 @@ mod avx512 {
                 st.put3(SHEAR, l, &h.shear);
                 st.put3(RTORQUE, l, &h.r_torque);
             }
-            let inp = PairIn {
-                xi: st.three(XI),
-                xj: st.three(XJ),
-                shift: st.three(SHIFT),
-                radi: st.one(RADI),
-                radj: st.one(RADJ),
-                mi: st.one(MI),
-                mj: st.one(MJ),
-                vi: st.three(VI),
-                vj: st.three(VJ),
-                wi: st.three(WI),
-                wj: st.three(WJ),
-                shear: st.three(SHEAR),
-                r_torque: st.three(RTORQUE),
-            };
-            let o = batch::pair(&inp, params, update_history);
-            macro_rules! arr {
-                ($v:expr) => {
-                    [$v[0].to_array(), $v[1].to_array(), $v[2].to_array()]
-                };
-            }
-            let (fi, ti, fj, tj) = (arr!(o.fi), arr!(o.ti), arr!(o.fj), arr!(o.tj));
-            let (sh, rt, en) = (arr!(o.shear), arr!(o.r_torque), arr!(o.en));
-            let damping = o.damping.to_array();
-            let (touch, mob, slide) = (o.touch.bits(), o.mobilised.bits(), o.sliding.bits());
+            let o = E::eval8(&st, params, update_history);
+            let (fi, ti, fj, tj) = (&o.fi, &o.ti, &o.fj, &o.tj);
+            let (sh, rt, en) = (&o.shear, &o.r_torque, &o.en);
+            let damping = o.damping;
+            let (touch, mob, slide) = (o.touch, o.mobilised, o.sliding);
             for (l, &k) in ks[..count].iter().enumerate() {
                 let k = k as usize;
                 let at = |a: &[[f64; 8]; 3]| [a[0][l], a[1][l], a[2][l]];
                 let (di, dj) = (
                     ForceData {
-                        delta_f: at(&fi),
-                        delta_torque: at(&ti),
+                        delta_f: at(fi),
+                        delta_torque: at(ti),
                     },
                     ForceData {
-                        delta_f: at(&fj),
-                        delta_torque: at(&tj),
+                        delta_f: at(fj),
+                        delta_torque: at(tj),
                     },
                 );
                 let p = pairs.get_unchecked(k);
@@ -442,7 +671,7 @@ mod avx512 {
                 debug_assert!(bit(touch));
                 aux[k] = PairAux {
                     damping: damping[l],
-                    en: at(&en),
+                    en: at(en),
                     contact: match (bit(touch), bit(mob)) {
                         (false, _) => PairContact::Apart,
                         (true, false) => PairContact::Touching,
@@ -452,8 +681,8 @@ mod avx512 {
                 };
                 if update_history {
                     *hist.get_unchecked_mut(k) = ContactHistory {
-                        shear: at(&sh),
-                        r_torque: at(&rt),
+                        shear: at(sh),
+                        r_torque: at(rt),
                     };
                 }
             }
@@ -491,21 +720,29 @@ mod tests {
         s
     }
 
-    /// Both paths over every listed pair of dense sheared states of every rolling model, with
-    /// and without history update, then 200 whole steps each: equal bits everywhere. Two
-    /// materials: the paper's (e = 1, eta_r 0.5) and a damped one without rolling dashpot
-    /// (e = 0.5, eta_r 0), which take different branches of the kernel.
+    /// Each SIMD path this CPU runs against the scalar one over every listed pair of dense
+    /// sheared states of every rolling model, with and without history update, then 200
+    /// whole steps each: equal bits everywhere. Two materials: the paper's (e = 1, eta_r
+    /// 0.5) and a damped one without rolling dashpot (e = 0.5, eta_r 0), which take
+    /// different branches of the kernel.
     #[test]
-    fn avx512_pass_gives_the_scalar_bits_on_dense_sheared_states() {
-        if KernelPath::detect() != KernelPath::Avx512 {
+    fn simd_passes_give_the_scalar_bits_on_dense_sheared_states() {
+        let simd: Vec<_> = KernelPath::available()
+            .into_iter()
+            .filter(|&k| k != KernelPath::Scalar)
+            .collect();
+        for k in [KernelPath::Avx2, KernelPath::Avx512] {
+            assert_eq!(k.checked("kernel").is_ok(), simd.contains(&k));
+        }
+        if simd.is_empty() {
             // the scalar path is the only one here; the rest of the suite tests it
-            assert!(KernelPath::Avx512.checked("kernel").is_err());
-            eprintln!("no AVX-512F on this CPU: only the scalar path exists here");
+            eprintln!("neither AVX2 nor AVX-512 on this CPU: only the scalar path exists here");
             return;
         }
-        for (model, e, eta) in RollingModel::ALL
+        for (model, e, eta, path) in RollingModel::ALL
             .into_iter()
             .flat_map(|m| [(m, 1.0, 0.5), (m, 0.5, 0.0)])
+            .flat_map(|(m, e, eta)| simd.iter().map(move |&p| (m, e, eta, p)))
         {
             let mut base = sheared(model, e, eta);
             // contacts that start now (zero history) besides the built-up ones: every 7th pair
@@ -517,7 +754,7 @@ mod tests {
                 let mut a = base.clone();
                 let mut b = base.clone();
                 a.set_kernel(KernelPath::Scalar).unwrap();
-                b.set_kernel(KernelPath::Avx512).unwrap();
+                b.set_kernel(path).unwrap();
                 a.record_pair_forces = true;
                 b.record_pair_forces = true;
                 a.compute_forces(update).unwrap();
@@ -564,7 +801,7 @@ mod tests {
             let mut a = base.clone();
             let mut b = base;
             a.set_kernel(KernelPath::Scalar).unwrap();
-            b.set_kernel(KernelPath::Avx512).unwrap();
+            b.set_kernel(path).unwrap();
             for _ in 0..200 {
                 a.step().unwrap();
                 b.step().unwrap();
@@ -573,8 +810,9 @@ mod tests {
                 assert_eq!(xa.map(f64::to_bits), xb.map(f64::to_bits), "{model:?}");
             }
             eprintln!(
-                "{model:?}, e {e}, eta_r {eta}: {touching} touching, {sliding} sliding, {mobilised} at the \
-                 rolling limit, {fresh} new: equal bits"
+                "{} {model:?}, e {e}, eta_r {eta}: {touching} touching, {sliding} sliding, {mobilised} at the \
+                 rolling limit, {fresh} new: equal bits",
+                path.name()
             );
         }
     }
