@@ -165,8 +165,9 @@ pub const CHECKPOINT_EVERY: std::time::Duration = std::time::Duration::from_secs
 /// File name of a native run's checkpoint in its output directory.
 pub const CHECKPOINT_NAME: &str = "native_checkpoint.bin";
 
-/// Version of the checkpoint format; a checkpoint of another version is not read.
-const CHECKPOINT_VERSION: u32 = 2;
+/// Version of the checkpoint format; a checkpoint of another version is not read (3: the
+/// per-pair state split from epsd_implicit's per-pair dashpot, 2026-12-02).
+const CHECKPOINT_VERSION: u32 = 3;
 
 /// Everything a native run holds part way: the whole solver state (particles, pair and wall
 /// histories, neighbour list and its rebuild state, servo, plates and meshes, step), the rows

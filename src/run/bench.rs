@@ -82,6 +82,10 @@ pub struct BenchReport {
     /// Resident memory per particle of the native solver [bytes] (peak RSS growth while the
     /// state was built and run, divided by the particle count).
     pub native_bytes_per_particle: Option<f64>,
+    /// The heap the solver holds at the end of the first native run, by item [bytes per
+    /// particle].
+    #[serde(default)]
+    pub native_held_per_particle: Vec<(String, f64)>,
     /// Estimated wall time of one full `paper` run (3 stages) per code [hours].
     pub paper_run_hours: Vec<(String, f64)>,
     pub date_utc: String,
@@ -201,14 +205,21 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     c.snapshot_every = 0;
     let mut rows = Vec::new();
     let mut rss_native = None;
+    let mut held_native: Vec<(String, f64)> = Vec::new();
     for &kernel in &a.kernels {
         for &t in &a.threads {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(t)
                 .build()
                 .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-            type Timed = (f64, Option<f64>, Option<PhaseTimes>, (usize, usize, usize));
-            let (secs, cpu, phases, counts) = pool.install(|| -> Result<Timed> {
+            type Timed = (
+                f64,
+                Option<f64>,
+                Option<PhaseTimes>,
+                (usize, usize, usize),
+                Vec<(&'static str, usize)>,
+            );
+            let (secs, cpu, phases, counts, held) = pool.install(|| -> Result<Timed> {
                 let mut s = ShearSim::new(&c, &state);
                 s.set_kernel(kernel)?;
                 s.setup(0.0)?;
@@ -226,9 +237,13 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 let el = t0.elapsed().as_secs_f64();
                 let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
                 s.check_finite()?;
-                Ok((el, cpu, s.phase_times(), s.contact_counts()))
+                Ok((el, cpu, s.phase_times(), s.contact_counts(), s.memory()))
             })?;
             if rss_native.is_none() {
+                held_native = held
+                    .iter()
+                    .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
+                    .collect();
                 rss_native = match (rss0, peak_rss()) {
                     (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
                     _ => None,
@@ -343,6 +358,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         native_2_vs_1,
         kernel,
         native_bytes_per_particle: rss_native,
+        native_held_per_particle: held_native.clone(),
         paper_run_hours,
         date_utc: utc_stamp(),
     };
@@ -354,6 +370,18 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     }
     if let Some(b) = rss_native {
         println!("  native memory: {b:.0} bytes per particle (peak RSS growth)");
+    }
+    if !held_native.is_empty() {
+        let total: f64 = held_native.iter().map(|(_, b)| b).sum();
+        let parts: Vec<String> = held_native
+            .iter()
+            .filter(|(_, b)| *b > 0.0)
+            .map(|(item, b)| format!("{item} {b:.0}"))
+            .collect();
+        println!(
+            "  held by the solver: {total:.0} bytes per particle ({})",
+            parts.join(", ")
+        );
     }
     for (who, hrs) in &report.paper_run_hours {
         println!(

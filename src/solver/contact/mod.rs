@@ -165,6 +165,17 @@ pub struct ContactHistory {
     pub r_torque: V3,
 }
 
+impl ContactHistory {
+    /// Every bit of every value is zero: the default (`+0.0`), unlike a `-0.0` history,
+    /// which compares equal to it.
+    pub fn all_bits_zero(&self) -> bool {
+        self.shear
+            .iter()
+            .chain(&self.r_torque)
+            .all(|v| v.to_bits() == 0)
+    }
+}
+
 /// Values of one evaluated contact, for observers and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ContactOutcome {

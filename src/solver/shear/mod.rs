@@ -40,11 +40,42 @@ use servo::Servo;
 /// Most mesh contact records one sphere may hold at once.
 const MAX_WALL_CONTACTS: usize = 8;
 
-/// Mesh contact records of one particle (fix_contact_history_mesh's partner list).
-#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
+/// Mesh contact records of one particle (fix_contact_history_mesh's partner list), in the
+/// order they were created, at most [`MAX_WALL_CONTACTS`]. Held on the heap only while the
+/// particle has records: most particles are away from the plates, and a fixed array of 8
+/// records was 840 bytes per particle, the largest item of the solver's memory. Stored in
+/// checkpoints as that fixed array ([`FixedSlots`]), so checkpoints of either layout resume.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[serde(from = "FixedSlots", into = "FixedSlots")]
 struct WallSlots {
+    rec: Vec<TriContactRecord>,
+}
+
+/// The checkpoint form of [`WallSlots`]: a count and 8 records.
+#[derive(Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
+struct FixedSlots {
     n: u8,
     rec: [TriContactRecord; MAX_WALL_CONTACTS],
+}
+
+impl From<FixedSlots> for WallSlots {
+    fn from(f: FixedSlots) -> Self {
+        let n = (f.n as usize).min(MAX_WALL_CONTACTS);
+        WallSlots {
+            rec: f.rec[..n].to_vec(),
+        }
+    }
+}
+
+impl From<WallSlots> for FixedSlots {
+    fn from(w: WallSlots) -> Self {
+        let mut f = FixedSlots {
+            n: w.rec.len() as u8,
+            ..Default::default()
+        };
+        f.rec[..w.rec.len()].copy_from_slice(&w.rec);
+        f
+    }
 }
 
 /// The 9 periodic image shifts (x, z) of a triangle; index 4 is the triangle itself.
@@ -69,15 +100,20 @@ enum PairContact {
     RollingMobilised,
 }
 
-/// Per pair, from the force loop: the implicit dashpot's coefficient and contact normal, and
-/// the contact state.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
-struct PairAux {
-    damping: f64,
-    en: V3,
+/// Per pair, from the force loop: the contact state (2 bytes; what observers count).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+struct PairState {
     contact: PairContact,
     /// The tangential force is at the Coulomb limit `mu_p |Fn|` (to 1e-9, a label only).
     sliding: bool,
+}
+
+/// Per pair, from the force loop, for epsd_implicit only: the rolling dashpot's coefficient
+/// and the contact normal, which the implicit half-kick reads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+struct PairDamp {
+    damping: f64,
+    en: V3,
 }
 
 /// The shear box state and time loop. The time step is read from `case.dt` once, in
@@ -120,10 +156,14 @@ pub struct ShearSim {
     record_pair_forces: bool,
     /// Per particle, the sum of its pair increments in pair order ([`pairs::pass`]).
     acc: Vec<ForceData>,
-    /// epsd_implicit: per pair the dashpot coefficient and contact normal.
-    pair_damp: Vec<PairAux>,
+    /// Per pair, its contact state at the last force evaluation.
+    pair_state: Vec<PairState>,
+    /// epsd_implicit: per pair the dashpot coefficient and contact normal (empty otherwise:
+    /// 40 bytes per pair not held nor written by the other models).
+    pair_damp: Vec<PairDamp>,
     /// epsd_implicit: per particle `A = sum C P` (symmetric: xx yy zz xy xz yz) and
-    /// `B = sum C P w_j` of its rolling dashpots, for the implicit final half-kick.
+    /// `B = sum C P w_j` of its rolling dashpots, for the implicit final half-kick (empty
+    /// for the other models).
     imp: Vec<([f64; 6], V3)>,
     implicit: bool,
     wall: Vec<WallSlots>,
@@ -257,8 +297,13 @@ impl ShearSim {
             pair_force: Vec::new(),
             record_pair_forces: false,
             acc: vec![ForceData::default(); n],
+            pair_state: Vec::new(),
             pair_damp: Vec::new(),
-            imp: vec![([0.0; 6], [0.0; 3]); n],
+            imp: if case.models.rolling == crate::spec::RollingModel::EpsdImplicit {
+                vec![([0.0; 6], [0.0; 3]); n]
+            } else {
+                Vec::new()
+            },
             implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
             wall: vec![WallSlots::default(); n],
             wall_force: vec![([0.0; 3], [0.0; 3]); n],
@@ -325,7 +370,10 @@ impl ShearSim {
     /// Sizes the per-pair buffers for the current pair list (after a build).
     fn size_pair_buffers(&mut self) {
         let np = self.nl.pairs.len();
-        self.pair_damp.resize(np, PairAux::default());
+        neighbor::resize_snug(&mut self.pair_state, np);
+        if self.implicit {
+            neighbor::resize_snug(&mut self.pair_damp, np);
+        }
     }
 
     /// Starts a new run (LIGGGHTS `run` after changing fixes): the bottom plate's speed, the
@@ -431,6 +479,7 @@ impl ShearSim {
             },
             &mut self.nl.hist,
             &mut self.pair_force,
+            &mut self.pair_state,
             &mut self.pair_damp,
             &mut self.acc,
             pairs::Particles {
@@ -471,44 +520,59 @@ impl ShearSim {
             trace: log::log_enabled!(log::Level::Trace),
         };
         let failed = std::sync::atomic::AtomicBool::new(false);
-        self.f
+        let body = |q: usize,
+                    f: &mut V3,
+                    t: &mut V3,
+                    slots: &mut WallSlots,
+                    wf: &mut (V3, V3),
+                    imp: &mut ([f64; 6], V3)| {
+            *f = [0.0; 3];
+            *t = [0.0; 3];
+            if implicit {
+                *imp = ([0.0; 6], [0.0; 3]);
+                for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
+                    let PairDamp { damping: c, en: n } = pd[k as usize];
+                    if c == 0.0 {
+                        continue;
+                    }
+                    let pr = &nl.pairs[k as usize];
+                    let other = if is_i { pr.j } else { pr.i } as usize;
+                    add_dashpot(imp, c, n, torsion, omega[other]);
+                }
+            }
+            // the pair sums (pairs::pass)
+            let a = &acc[q];
+            for c in 0..3 {
+                f[c] += a.delta_f[c];
+                t[c] += a.delta_torque[c];
+            }
+            // a particle without plate candidates holds no records
+            // (`drop_records_without_candidates`): nothing to mark, test or clean up
+            if walls.cstart[q] == walls.cstart[q + 1] {
+                *wf = ([0.0; 3], [0.0; 3]);
+            } else if !walls.particle(q, slots, f, t, wf, imp) {
+                failed.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        };
+        let each = self
+            .f
             .par_iter_mut()
             .zip(self.torque.par_iter_mut())
             .zip(self.wall.par_iter_mut())
-            .zip(self.wall_force.par_iter_mut().zip(self.imp.par_iter_mut()))
-            .with_min_len(HEAVY_CHUNK)
-            .enumerate()
-            .for_each(|(q, (((f, t), slots), (wf, imp)))| {
-                *f = [0.0; 3];
-                *t = [0.0; 3];
-                if implicit {
-                    *imp = ([0.0; 6], [0.0; 3]);
-                    for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
-                        let PairAux {
-                            damping: c, en: n, ..
-                        } = pd[k as usize];
-                        if c == 0.0 {
-                            continue;
-                        }
-                        let pr = &nl.pairs[k as usize];
-                        let other = if is_i { pr.j } else { pr.i } as usize;
-                        add_dashpot(imp, c, n, torsion, omega[other]);
-                    }
-                }
-                // the pair sums (pairs::pass)
-                let a = &acc[q];
-                for c in 0..3 {
-                    f[c] += a.delta_f[c];
-                    t[c] += a.delta_torque[c];
-                }
-                // a particle without plate candidates holds no records
-                // (`drop_records_without_candidates`): nothing to mark, test or clean up
-                if walls.cstart[q] == walls.cstart[q + 1] {
-                    *wf = ([0.0; 3], [0.0; 3]);
-                } else if !walls.particle(q, slots, f, t, wf, imp) {
-                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
-                }
-            });
+            .zip(self.wall_force.par_iter_mut());
+        if implicit {
+            each.zip(self.imp.par_iter_mut())
+                .with_min_len(HEAVY_CHUNK)
+                .enumerate()
+                .for_each(|(q, ((((f, t), slots), wf), imp))| body(q, f, t, slots, wf, imp));
+        } else {
+            // the dashpot sums are held by epsd_implicit only (72 bytes per particle)
+            each.with_min_len(HEAVY_CHUNK)
+                .enumerate()
+                .for_each(|(q, (((f, t), slots), wf))| {
+                    body(q, f, t, slots, wf, &mut ([0.0; 6], [0.0; 3]))
+                });
+        }
         if failed.into_inner() {
             return Err(Error::Solver {
                 step: self.step,
@@ -620,7 +684,7 @@ mod tests {
                     })
             };
             let one = run(1);
-            let count = |f: fn(&PairAux) -> bool| one.pair_damp.iter().filter(|a| f(a)).count();
+            let count = |f: fn(&PairState) -> bool| one.pair_state.iter().filter(|a| f(a)).count();
             let touching = count(|a| a.contact != PairContact::Apart);
             let sliding = count(|a| a.sliding);
             let rolling_limit = count(|a| a.contact == PairContact::RollingMobilised);
@@ -629,7 +693,10 @@ mod tests {
                 "{model}: a dense sheared state ({touching} touching, {sliding} sliding, \
                  {rolling_limit} at the rolling limit)"
             );
-            assert!(one.wall.iter().any(|w| w.n > 0), "{model}: plate contacts");
+            assert!(
+                one.wall.iter().any(|w| !w.rec.is_empty()),
+                "{model}: plate contacts"
+            );
             assert!(one.omega.iter().any(|w| w[2] != 0.0));
             let reference = state_bytes(&one);
             for threads in [2, 3] {

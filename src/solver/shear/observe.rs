@@ -64,7 +64,7 @@ impl ShearSim {
                     * (w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
             })
             .sum();
-        let (touching, mobilised) = self.pair_damp.iter().fold((0usize, 0usize), |(t, m), a| {
+        let (touching, mobilised) = self.pair_state.iter().fold((0usize, 0usize), |(t, m), a| {
             (
                 t + usize::from(a.contact != PairContact::Apart),
                 m + usize::from(a.contact == PairContact::RollingMobilised),
@@ -127,12 +127,63 @@ impl ShearSim {
     /// (listed pairs, touching pairs, particle-plate contacts) at the last force evaluation.
     pub fn contact_counts(&self) -> (usize, usize, usize) {
         let touching = self
-            .pair_damp
+            .pair_state
             .iter()
             .filter(|a| a.contact != PairContact::Apart)
             .count();
-        let walls = self.wall.iter().map(|w| w.n as usize).sum();
+        let walls = self.wall.iter().map(|w| w.rec.len()).sum();
         (self.nl.pairs.len(), touching, walls)
+    }
+
+    /// The heap memory the solver holds, by item [bytes] (allocated capacities; the meshes
+    /// and the case are left out: they do not grow with the particles).
+    pub fn memory(&self) -> Vec<(&'static str, usize)> {
+        fn b<T>(v: &Vec<T>) -> usize {
+            v.capacity() * std::mem::size_of::<T>()
+        }
+        let walls: usize = self
+            .wall
+            .iter()
+            .map(|w| {
+                w.rec.capacity() * std::mem::size_of::<crate::solver::trimesh::TriContactRecord>()
+            })
+            .sum();
+        let ftv = self
+            .force_time_velocities
+            .as_ref()
+            .map_or(0, |(v, w)| b(v) + b(w));
+        vec![
+            (
+                "particle arrays",
+                b(&self.x)
+                    + b(&self.v)
+                    + b(&self.omega)
+                    + b(&self.f)
+                    + b(&self.torque)
+                    + b(&self.radius)
+                    + b(&self.mass)
+                    + b(&self.kick)
+                    + b(&self.rotation)
+                    + b(&self.xhold)
+                    + b(&self.acc)
+                    + ftv,
+            ),
+            ("pair list", b(&self.nl.pairs)),
+            ("pair histories", b(&self.nl.hist)),
+            ("pair states", b(&self.pair_state)),
+            ("implicit pair dashpots", b(&self.pair_damp)),
+            ("pair forces", b(&self.pair_force)),
+            (
+                "per-particle pair index",
+                b(&self.nl.start) + b(&self.nl.entries),
+            ),
+            ("implicit dashpot sums", b(&self.imp)),
+            ("plate records", b(&self.wall) + walls),
+            (
+                "plate candidates and forces",
+                b(&self.wall_start) + b(&self.wall_cand) + b(&self.wall_force),
+            ),
+        ]
     }
 
     /// Neighbour rebuilds so far.

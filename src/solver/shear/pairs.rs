@@ -15,7 +15,7 @@
 //! results do not depend on the thread count.
 
 use super::neighbor::Pair;
-use super::{pair_contact, PairAux, PairContact, HEAVY_CHUNK};
+use super::{pair_contact, PairContact, PairDamp, PairState, HEAVY_CHUNK};
 use crate::error::{Error, Result};
 use crate::solver::contact::{surfaces_intersect, ContactHistory, ForceData};
 use crate::solver::material::PairParams;
@@ -154,7 +154,8 @@ pub(super) fn pass(
     csr: Csr,
     hist: &mut [ContactHistory],
     out: &mut Vec<(ForceData, ForceData)>,
-    aux: &mut [PairAux],
+    state: &mut [PairState],
+    damp: &mut [PairDamp],
     acc: &mut [ForceData],
     s: Particles,
     params: &PairParams,
@@ -162,70 +163,50 @@ pub(super) fn pass(
     record: bool,
 ) {
     let np = pairs.len();
-    assert!(acc.len() == s.x.len() && aux.len() == np && hist.len() == np);
+    assert!(acc.len() == s.x.len() && state.len() == np && hist.len() == np);
+    assert!(damp.is_empty() || damp.len() == np);
+    assert!(
+        path.runs_here(),
+        "the {} path on a CPU without it",
+        path.name()
+    );
     acc.fill(ForceData::default());
     let serial = rayon::current_num_threads() == 1;
-    // `out` is allocated only when written (the serial AVX-512 pass without `record` never
-    // does: 96 bytes per listed pair, about 430 B per particle, not held)
-    if record || !serial || path == KernelPath::Scalar {
-        out.resize(np, Default::default());
+    // `out` is allocated only when written (a serial pass without `record` never does: 96
+    // bytes per listed pair, about 430 B per particle, not held)
+    let write_out = record || !serial;
+    if write_out {
+        super::neighbor::resize_snug(out, np);
     }
-    match path {
-        KernelPath::Scalar if serial => {
-            let each = pairs.iter().zip(hist.iter_mut());
-            for ((p, h), (o, a)) in each.zip(out.iter_mut().zip(aux.iter_mut())) {
-                *o = scalar_one(p, h, a, s, params, update_history);
-                accumulate(acc, p.i as usize, p.j as usize, &o.0, &o.1);
-            }
-            return;
+    // the pieces of CHUNK pairs; `out` and `damp` pieces empty where not written
+    let mut outs: Vec<&mut [(ForceData, ForceData)]> = if write_out {
+        out[..np].chunks_mut(CHUNK).collect()
+    } else {
+        Vec::new()
+    };
+    let mut damps: Vec<&mut [PairDamp]> = damp.chunks_mut(CHUNK).collect();
+    let pieces = pairs
+        .chunks(CHUNK)
+        .zip(hist.chunks_mut(CHUNK))
+        .zip(state.chunks_mut(CHUNK))
+        .enumerate()
+        .map(|(k, ((pairs, hist), state))| Piece {
+            pairs,
+            hist,
+            state,
+            out: outs.get_mut(k).map(std::mem::take).unwrap_or_default(),
+            damp: damps.get_mut(k).map(std::mem::take).unwrap_or_default(),
+        });
+    if serial {
+        for pc in pieces {
+            piece(path, pc, Some(&mut *acc), s, params, update_history);
         }
-        KernelPath::Scalar => pairs
-            .par_iter()
-            .zip(hist.par_iter_mut())
-            .zip(out.par_iter_mut().zip(aux.par_iter_mut()))
-            .with_min_len(HEAVY_CHUNK)
-            .for_each(|((p, h), (o, a))| *o = scalar_one(p, h, a, s, params, update_history)),
-        KernelPath::Avx512 | KernelPath::Avx2 => {
-            #[cfg(target_arch = "x86_64")]
-            {
-                assert!(
-                    path.runs_here(),
-                    "the {} path on a CPU without it",
-                    path.name()
-                );
-                let c = simd::CHUNK;
-                if serial {
-                    let chunks = pairs.chunks(c).zip(hist.chunks_mut(c));
-                    for (k, ((p, h), a)) in chunks.zip(aux.chunks_mut(c)).enumerate() {
-                        let o = if record {
-                            &mut out[k * c..k * c + p.len()]
-                        } else {
-                            &mut []
-                        };
-                        let sum = Some(&mut *acc);
-                        // SAFETY: the path's target features checked above; the chunks have
-                        // equal lengths <= CHUNK; every particle index of a pair is in bounds.
-                        unsafe {
-                            simd::chunk_on(path, p, h, o, a, sum, record, s, params, update_history)
-                        };
-                    }
-                    return;
-                }
-                pairs
-                    .par_chunks(c)
-                    .zip(hist.par_chunks_mut(c))
-                    .zip(out.par_chunks_mut(c).zip(aux.par_chunks_mut(c)))
-                    .for_each(|((p, h), (o, a))| {
-                        // SAFETY: as above.
-                        unsafe {
-                            simd::chunk_on(path, p, h, o, a, None, true, s, params, update_history)
-                        }
-                    });
-            }
-            #[cfg(not(target_arch = "x86_64"))]
-            unreachable!("the SIMD paths are only selected on x86_64")
-        }
+        return;
     }
+    let pieces: Vec<Piece> = pieces.collect();
+    pieces
+        .into_par_iter()
+        .for_each(|pc| piece(path, pc, None, s, params, update_history));
     // Each particle's sum over its pairs in increasing pair index (the CSR `entries` are in
     // that order): the additions of the serial pass, in its order, so the same bits, made in
     // parallel over particles. Apart pairs add zeros: no bit changes (a sum started at +0 is
@@ -245,6 +226,63 @@ pub(super) fn pass(
         });
 }
 
+/// Pairs per piece of the pass.
+const CHUNK: usize = 256;
+
+/// One piece of the pair list (at most [`CHUNK`] pairs) with its per-pair slots: `out` (the
+/// increments) empty unless written, `damp` (epsd_implicit's dashpot) empty unless held.
+pub(super) struct Piece<'a> {
+    pub pairs: &'a [Pair],
+    pub hist: &'a mut [ContactHistory],
+    pub state: &'a mut [PairState],
+    pub out: &'a mut [(ForceData, ForceData)],
+    pub damp: &'a mut [PairDamp],
+}
+
+/// Evaluates one piece on `path`, adding the increments to `sum` in pair order when given.
+fn piece(
+    path: KernelPath,
+    pc: Piece,
+    sum: Option<&mut [ForceData]>,
+    s: Particles,
+    params: &PairParams,
+    update_history: bool,
+) {
+    let n = pc.pairs.len();
+    assert!(pc.hist.len() == n && pc.state.len() == n && n <= CHUNK);
+    assert!((pc.out.is_empty() || pc.out.len() == n) && (pc.damp.is_empty() || pc.damp.len() == n));
+    match path {
+        KernelPath::Scalar => {
+            let mut sum = sum;
+            for k in 0..n {
+                let p = &pc.pairs[k];
+                let (di, dj, st, dm) = scalar_one(p, &mut pc.hist[k], s, params, update_history);
+                pc.state[k] = st;
+                if let Some(d) = pc.damp.get_mut(k) {
+                    *d = dm;
+                }
+                if let Some(acc) = sum.as_deref_mut() {
+                    accumulate(acc, p.i as usize, p.j as usize, &di, &dj);
+                }
+                if let Some(o) = pc.out.get_mut(k) {
+                    *o = (di, dj);
+                }
+            }
+        }
+        KernelPath::Avx512 | KernelPath::Avx2 => {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the path runs on this CPU (checked by `pass`); the piece's slices as
+            // `chunk` asks (checked above); every particle index of a pair is in bounds
+            // (the neighbour list is built over these particles).
+            unsafe {
+                simd::chunk_on(path, pc, sum, s, params, update_history)
+            }
+            #[cfg(not(target_arch = "x86_64"))]
+            unreachable!("the SIMD paths are only selected on x86_64")
+        }
+    }
+}
+
 /// The per-particle index of the pairs (`NeighborList::start`, `entries`).
 #[derive(Clone, Copy)]
 pub(super) struct Csr<'a> {
@@ -252,16 +290,15 @@ pub(super) struct Csr<'a> {
     pub entries: &'a [(u32, bool)],
 }
 
-/// One pair by the scalar kernels: its state and history; returns i's and j's increments
-/// (zero when apart).
+/// One pair by the scalar kernels: its history (updated in place); returns i's and j's
+/// increments (zero when apart), its state and its dashpot.
 fn scalar_one(
     p: &Pair,
     hist: &mut ContactHistory,
-    damp: &mut PairAux,
     s: Particles,
     params: &PairParams,
     update_history: bool,
-) -> (ForceData, ForceData) {
+) -> (ForceData, ForceData, PairState, PairDamp) {
     let (i, j) = (p.i as usize, p.j as usize);
     let Some(mut cd) = pair_contact(
         p,
@@ -271,15 +308,12 @@ fn scalar_one(
         (s.v[i], s.v[j]),
         (s.omega[i], s.omega[j]),
     ) else {
-        *damp = PairAux::default();
         return Default::default();
     };
     let (fi, fj, o) = surfaces_intersect(&mut cd, params, hist, update_history);
     let ft2 = o.ft[0] * o.ft[0] + o.ft[1] * o.ft[1] + o.ft[2] * o.ft[2];
     let cap = params.coeff_frict * o.normal.fn_.abs();
-    *damp = PairAux {
-        damping: o.implicit_damping,
-        en: cd.en,
+    let state = PairState {
         contact: if o.rolling_mobilised {
             PairContact::RollingMobilised
         } else {
@@ -287,21 +321,21 @@ fn scalar_one(
         },
         sliding: ft2 >= cap * cap * (1.0 - 1e-9),
     };
-    (fi, fj)
+    let damp = PairDamp {
+        damping: o.implicit_damping,
+        en: cd.en,
+    };
+    (fi, fj, state, damp)
 }
 
 #[cfg(target_arch = "x86_64")]
 mod simd {
-    use super::super::neighbor::Pair;
-    use super::super::{PairAux, PairContact};
-    use super::{KernelPath, Particles};
+    use super::super::{PairContact, PairDamp, PairState};
+    use super::{KernelPath, Particles, Piece, CHUNK};
     use crate::solver::contact::batch::{self, PairIn};
     use crate::solver::contact::lanes::{F4, F8};
     use crate::solver::contact::{ContactHistory, ForceData};
     use crate::solver::material::PairParams;
-
-    /// Pairs per piece of the parallel pass.
-    pub(super) const CHUNK: usize = 256;
 
     /// The inputs of 8 lanes, one array per scalar input (lane `l` of input `n` at
     /// `[n][l]`), which the kernel loads as vectors. Filled by scalar copies from the pair
@@ -463,42 +497,17 @@ mod simd {
     /// # Safety
     /// `path` is [`KernelPath::Avx512`] or [`KernelPath::Avx2`] and runs on this CPU; the
     /// rest as [`chunk`].
-    #[allow(clippy::too_many_arguments)]
     pub(super) unsafe fn chunk_on(
         path: KernelPath,
-        pairs: &[Pair],
-        hist: &mut [ContactHistory],
-        out: &mut [(ForceData, ForceData)],
-        aux: &mut [PairAux],
+        pc: Piece,
         sum: Option<&mut [ForceData]>,
-        record: bool,
         s: Particles,
         params: &PairParams,
         update_history: bool,
     ) {
         match path {
-            KernelPath::Avx512 => chunk_avx512(
-                pairs,
-                hist,
-                out,
-                aux,
-                sum,
-                record,
-                s,
-                params,
-                update_history,
-            ),
-            KernelPath::Avx2 => chunk_avx2(
-                pairs,
-                hist,
-                out,
-                aux,
-                sum,
-                record,
-                s,
-                params,
-                update_history,
-            ),
+            KernelPath::Avx512 => chunk_avx512(pc, sum, s, params, update_history),
+            KernelPath::Avx2 => chunk_avx2(pc, sum, s, params, update_history),
             KernelPath::Scalar => unreachable!("the scalar path has no SIMD chunk"),
         }
     }
@@ -508,29 +517,14 @@ mod simd {
     /// # Safety
     /// avx512f and avx512dq; the rest as [`chunk`].
     #[target_feature(enable = "avx512f,avx512dq")]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) unsafe fn chunk_avx512(
-        pairs: &[Pair],
-        hist: &mut [ContactHistory],
-        out: &mut [(ForceData, ForceData)],
-        aux: &mut [PairAux],
+    unsafe fn chunk_avx512(
+        pc: Piece,
         sum: Option<&mut [ForceData]>,
-        record: bool,
         s: Particles,
         params: &PairParams,
         update_history: bool,
     ) {
-        chunk::<Avx512>(
-            pairs,
-            hist,
-            out,
-            aux,
-            sum,
-            record,
-            s,
-            params,
-            update_history,
-        )
+        chunk::<Avx512>(pc, sum, s, params, update_history)
     }
 
     /// [`chunk`] with AVX2 lanes.
@@ -538,67 +532,55 @@ mod simd {
     /// # Safety
     /// avx and avx2; the rest as [`chunk`].
     #[target_feature(enable = "avx,avx2")]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) unsafe fn chunk_avx2(
-        pairs: &[Pair],
-        hist: &mut [ContactHistory],
-        out: &mut [(ForceData, ForceData)],
-        aux: &mut [PairAux],
+    unsafe fn chunk_avx2(
+        pc: Piece,
         sum: Option<&mut [ForceData]>,
-        record: bool,
         s: Particles,
         params: &PairParams,
         update_history: bool,
     ) {
-        chunk::<Avx2>(
-            pairs,
-            hist,
-            out,
-            aux,
-            sum,
-            record,
-            s,
-            params,
-            update_history,
-        )
+        chunk::<Avx2>(pc, sum, s, params, update_history)
     }
 
-    /// The pairs of one chunk: first which of them touch (one at a time, the kernel's own
+    /// The pairs of one piece: first which of them touch (one at a time, the kernel's own
     /// test [`batch::touching`] on the same operations, so the same answer); then the
-    /// touching ones, 8 at a time, through [`batch::pair`] (8 lanes of `E`), their increments added to `sum`
-    /// in pair order when given (the serial pass) and written to `out` when `record` (the
-    /// parallel pass, which sums afterwards, and observers); the apart pairs' `aux` cleared
-    /// (and their `out` slots when `record`). A last group's missing lanes repeat earlier
-    /// pairs of the chunk and are not written back.
+    /// touching ones, 8 at a time, through [`batch::pair`] (8 lanes of `E`), their
+    /// increments added to `sum` in pair order when given (the serial pass) and written to
+    /// `out` when it is held (the parallel pass, which sums afterwards, and observers), the
+    /// dashpot to `damp` when held (epsd_implicit); the apart pairs' slots cleared. A last
+    /// group's missing lanes repeat earlier pairs of the piece and are not written back.
     ///
     /// # Safety
-    /// The target features of `E` (entered through [`chunk_avx512`], [`chunk_avx2`]);
-    /// `pairs`, `out` (when `record`), `aux` of equal length <= [`CHUNK`]; particle indices
-    /// in bounds of `s`.
+    /// The target features of `E` (entered through [`chunk_avx512`], [`chunk_avx2`]); the
+    /// piece's slices as [`Piece`] says, at most [`CHUNK`] pairs; particle indices in
+    /// bounds of `s`.
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     unsafe fn chunk<E: Eval8>(
-        pairs: &[Pair],
-        hist: &mut [ContactHistory],
-        out: &mut [(ForceData, ForceData)],
-        aux: &mut [PairAux],
+        pc: Piece,
         mut sum: Option<&mut [ForceData]>,
-        record: bool,
         s: Particles,
         params: &PairParams,
         update_history: bool,
     ) {
+        let Piece {
+            pairs,
+            hist,
+            state,
+            out,
+            damp,
+        } = pc;
+        let (record, implicit) = (!out.is_empty(), !damp.is_empty());
         let n = pairs.len();
-        assert!(aux.len() == n && hist.len() == n && n <= CHUNK && (!record || out.len() == n));
+        assert!(state.len() == n && hist.len() == n && n <= CHUNK);
+        assert!((!record || out.len() == n) && (!implicit || damp.len() == n));
         let np = s.x.len();
         assert!(s.v.len() == np && s.omega.len() == np && s.radius.len() == np);
         assert!(s.mass.len() == np);
         // 1. which pairs touch; every state (and recorded force) slot starts cleared, the
         // touching pairs' are written in step 2
-        aux.fill(PairAux::default());
-        if record {
-            out.fill(Default::default());
-        }
+        state.fill(PairState::default());
+        damp.fill(PairDamp::default());
+        out.fill(Default::default());
         // (8 spare slots: the last group of step 2 reads 8 and writes back `count`)
         let mut touching = [0u16; CHUNK + 8];
         let mut nt = 0;
@@ -669,9 +651,7 @@ mod simd {
                 }
                 let bit = |m: u8| (m >> l) & 1 == 1;
                 debug_assert!(bit(touch));
-                aux[k] = PairAux {
-                    damping: damping[l],
-                    en: at(en),
+                state[k] = PairState {
                     contact: match (bit(touch), bit(mob)) {
                         (false, _) => PairContact::Apart,
                         (true, false) => PairContact::Touching,
@@ -679,6 +659,12 @@ mod simd {
                     },
                     sliding: bit(slide),
                 };
+                if implicit {
+                    damp[k] = PairDamp {
+                        damping: damping[l],
+                        en: at(en),
+                    };
+                }
                 if update_history {
                     *hist.get_unchecked_mut(k) = ContactHistory {
                         shear: at(sh),
@@ -775,10 +761,15 @@ mod tests {
                         fb(&b.pair_force[k]),
                         "{model:?} pair {k} forces"
                     );
-                    let (xa, xb) = (&a.pair_damp[k], &b.pair_damp[k]);
-                    assert_eq!(xa.damping.to_bits(), xb.damping.to_bits());
-                    assert_eq!(xa.en.map(f64::to_bits), xb.en.map(f64::to_bits));
-                    assert_eq!((xa.contact, xa.sliding), (xb.contact, xb.sliding));
+                    let (xa, xb) = (&a.pair_state[k], &b.pair_state[k]);
+                    assert_eq!(xa, xb, "{model:?} pair {k} state");
+                    assert_eq!(a.pair_damp.len(), b.pair_damp.len());
+                    // the dashpot slots are held by epsd_implicit only
+                    assert_eq!(a.pair_damp.is_empty(), model != RollingModel::EpsdImplicit);
+                    if let (Some(da), Some(db)) = (a.pair_damp.get(k), b.pair_damp.get(k)) {
+                        assert_eq!(da.damping.to_bits(), db.damping.to_bits());
+                        assert_eq!(da.en.map(f64::to_bits), db.en.map(f64::to_bits));
+                    }
                     if update && xa.contact != PairContact::Apart {
                         touching += 1;
                         sliding += usize::from(xa.sliding);

@@ -195,7 +195,8 @@ impl ShearSim {
     pub(super) fn drop_records_without_candidates(&mut self) {
         for (q, slots) in self.wall.iter_mut().enumerate() {
             if self.wall_start[q] == self.wall_start[q + 1] {
-                slots.n = 0;
+                // frees the records' memory too
+                slots.rec = Vec::new();
             }
         }
     }

@@ -218,7 +218,7 @@ impl ShearSim {
                 }
             }
             let slots = &mut self.wall[q];
-            if slots.n as usize == MAX_WALL_CONTACTS {
+            if slots.rec.len() == MAX_WALL_CONTACTS {
                 return Err(Error::Solver {
                     step: st.step,
                     msg: format!(
@@ -227,14 +227,13 @@ impl ShearSim {
                     ),
                 });
             }
-            slots.rec[slots.n as usize] = TriContactRecord {
+            slots.rec.push(TriContactRecord {
                 mesh,
                 tri,
                 keep: true,
                 hist,
                 ..Default::default()
-            };
-            slots.n += 1;
+            });
         }
         self.drop_records_without_candidates();
         self.size_pair_buffers();
@@ -286,7 +285,7 @@ impl ShearSim {
             .iter()
             .zip(&probe.nl.hist)
             .zip(&probe.pair_force)
-            .zip(&probe.pair_damp)
+            .zip(&probe.pair_state)
             .filter(|(_, a)| a.contact != PairContact::Apart)
             .map(|(((p, hist), (fi, fj)), a)| PairObservation {
                 i: p.i,
@@ -303,7 +302,7 @@ impl ShearSim {
             .collect();
         let mut walls = Vec::new();
         for (q, slots) in probe.wall.iter().enumerate() {
-            for r in &slots.rec[..slots.n as usize] {
+            for r in &slots.rec {
                 walls.push(WallObservation {
                     particle: q as u32,
                     mesh: r.mesh,

@@ -70,7 +70,7 @@ impl WallContext<'_> {
         *wf = ([0.0; 3], [0.0; 3]);
         for m in 0..2u8 {
             // markAllContacts of this mesh
-            for r in &mut slots.rec[..slots.n as usize] {
+            for r in &mut slots.rec {
                 if r.mesh == m {
                     r.keep = false;
                 }
@@ -92,7 +92,7 @@ impl WallContext<'_> {
                     continue;
                 }
                 // handleContact
-                let n = slots.n as usize;
+                let n = slots.rec.len();
                 let slot = match (0..n).find(|&i| slots.rec[i].mesh == m && slots.rec[i].tri == tri)
                 {
                     Some(i) => {
@@ -126,8 +126,7 @@ impl WallContext<'_> {
                                 }
                             }
                         }
-                        slots.rec[n] = rec;
-                        slots.n += 1;
+                        slots.rec.push(rec);
                         n
                     }
                 };
@@ -178,15 +177,7 @@ impl WallContext<'_> {
                 }
             }
             // cleanUpContacts of this mesh
-            let mut k = 0;
-            for i in 0..slots.n as usize {
-                let r = slots.rec[i];
-                if r.mesh != m || r.keep {
-                    slots.rec[k] = r;
-                    k += 1;
-                }
-            }
-            slots.n = k as u8;
+            slots.rec.retain(|r| r.mesh != m || r.keep);
         }
         true
     }
