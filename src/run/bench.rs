@@ -218,8 +218,9 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 Option<PhaseTimes>,
                 (usize, usize, usize),
                 Vec<(&'static str, usize)>,
+                (usize, usize),
             );
-            let (secs, cpu, phases, counts, held) = pool.install(|| -> Result<Timed> {
+            let (secs, cpu, phases, counts, held, cand) = pool.install(|| -> Result<Timed> {
                 let mut s = ShearSim::new(&c, &state);
                 s.set_kernel(kernel)?;
                 s.setup(0.0)?;
@@ -237,7 +238,14 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 let el = t0.elapsed().as_secs_f64();
                 let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
                 s.check_finite()?;
-                Ok((el, cpu, s.phase_times(), s.contact_counts(), s.memory()))
+                Ok((
+                    el,
+                    cpu,
+                    s.phase_times(),
+                    s.contact_counts(),
+                    s.memory(),
+                    s.plate_candidates(),
+                ))
             })?;
             if rss_native.is_none() {
                 held_native = held
@@ -277,8 +285,12 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             );
             println!(
                 "           per particle: {:.2} listed pairs, {:.2} touching pairs, {:.3} plate \
-                 contacts",
-                per_particle.0, per_particle.1, per_particle.2
+                 contacts; {:.1} % of the particles test {:.1} plate triangles each",
+                per_particle.0,
+                per_particle.1,
+                per_particle.2,
+                100.0 * cand.0 as f64 / n as f64,
+                cand.1 as f64 / cand.0.max(1) as f64
             );
             rows.push(BenchRow {
                 code: "native".into(),

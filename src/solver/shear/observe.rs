@@ -135,6 +135,13 @@ impl ShearSim {
         (self.nl.pairs.len(), touching, walls)
     }
 
+    /// (particles with plate candidates, candidate triangle images in all) of the last
+    /// neighbour build: the particles whose plate contacts are tested each step.
+    pub fn plate_candidates(&self) -> (usize, usize) {
+        let with = self.wall_start.windows(2).filter(|w| w[1] > w[0]).count();
+        (with, self.wall_cand.len())
+    }
+
     /// The heap memory the solver holds, by item [bytes] (allocated capacities; the meshes
     /// and the case are left out: they do not grow with the particles).
     pub fn memory(&self) -> Vec<(&'static str, usize)> {
