@@ -124,11 +124,7 @@ fn force_pass(c: &mut Criterion) {
     for _ in 0..2_000 {
         sim.step().unwrap();
     }
-    let mut paths = vec![KernelPath::Scalar];
-    if KernelPath::detect() != KernelPath::Scalar {
-        paths.push(KernelPath::detect());
-    }
-    for path in paths {
+    for path in KernelPath::available() {
         let mut s = sim.clone();
         s.set_kernel(path).unwrap();
         let (listed, touching, _) = {
