@@ -393,6 +393,27 @@ mod simd {
         unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8;
     }
 
+    /// The kernel's inputs from the staged rows, `one(row)` loading one row's lanes.
+    #[inline(always)]
+    fn pair_in<L: Copy>(one: impl Fn(usize) -> L) -> PairIn<L> {
+        let three = |at: usize| [one(at), one(at + 1), one(at + 2)];
+        PairIn {
+            xi: three(XI),
+            xj: three(XJ),
+            shift: three(SHIFT),
+            radi: one(RADI),
+            radj: one(RADJ),
+            mi: one(MI),
+            mj: one(MJ),
+            vi: three(VI),
+            vj: three(VJ),
+            wi: three(WI),
+            wj: three(WJ),
+            shear: three(SHEAR),
+            r_torque: three(RTORQUE),
+        }
+    }
+
     /// AVX-512: the 8 lanes in one vector.
     pub(super) struct Avx512;
     /// AVX2: the 8 lanes as two vectors of 4, lanes 0-3 then 4-7.
@@ -401,23 +422,7 @@ mod simd {
     impl Eval8 for Avx512 {
         #[inline(always)]
         unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8 {
-            let one = |at: usize| F8::load(&st.0[at]);
-            let three = |at: usize| [one(at), one(at + 1), one(at + 2)];
-            let inp = PairIn {
-                xi: three(XI),
-                xj: three(XJ),
-                shift: three(SHIFT),
-                radi: one(RADI),
-                radj: one(RADJ),
-                mi: one(MI),
-                mj: one(MJ),
-                vi: three(VI),
-                vj: three(VJ),
-                wi: three(WI),
-                wj: three(WJ),
-                shear: three(SHEAR),
-                r_torque: three(RTORQUE),
-            };
+            let inp = pair_in(|at| F8::load(&st.0[at]));
             let o = batch::pair(&inp, params, update_history);
             let arr = |v: [F8; 3]| [v[0].to_array(), v[1].to_array(), v[2].to_array()];
             Out8 {
@@ -453,23 +458,7 @@ mod simd {
                 sliding: 0,
             };
             for half in [0, 4] {
-                let one = |at: usize| F4::load(&st.0[at][half..half + 4]);
-                let three = |at: usize| [one(at), one(at + 1), one(at + 2)];
-                let inp = PairIn {
-                    xi: three(XI),
-                    xj: three(XJ),
-                    shift: three(SHIFT),
-                    radi: one(RADI),
-                    radj: one(RADJ),
-                    mi: one(MI),
-                    mj: one(MJ),
-                    vi: three(VI),
-                    vj: three(VJ),
-                    wi: three(WI),
-                    wj: three(WJ),
-                    shear: three(SHEAR),
-                    r_torque: three(RTORQUE),
-                };
+                let inp = pair_in(|at| F4::load(&st.0[at][half..half + 4]));
                 let o = batch::pair(&inp, params, update_history);
                 let put = |dst: &mut [[f64; 8]; 3], v: [F4; 3]| {
                     for c in 0..3 {
@@ -512,35 +501,27 @@ mod simd {
         }
     }
 
-    /// [`chunk`] with AVX-512 lanes.
-    ///
-    /// # Safety
-    /// avx512f and avx512dq; the rest as [`chunk`].
-    #[target_feature(enable = "avx512f,avx512dq")]
-    unsafe fn chunk_avx512(
-        pc: Piece,
-        sum: Option<&mut [ForceData]>,
-        s: Particles,
-        params: &PairParams,
-        update_history: bool,
-    ) {
-        chunk::<Avx512>(pc, sum, s, params, update_history)
+    /// The entry of one width: [`chunk`] compiled with the width's target features.
+    macro_rules! entry {
+        ($name:ident, $features:literal, $width:ty) => {
+            /// [`chunk`] with this width's lanes.
+            ///
+            /// # Safety
+            #[doc = concat!("The CPU has ", $features, "; the rest as [`chunk`].")]
+            #[target_feature(enable = $features)]
+            unsafe fn $name(
+                pc: Piece,
+                sum: Option<&mut [ForceData]>,
+                s: Particles,
+                params: &PairParams,
+                update_history: bool,
+            ) {
+                chunk::<$width>(pc, sum, s, params, update_history)
+            }
+        };
     }
-
-    /// [`chunk`] with AVX2 lanes.
-    ///
-    /// # Safety
-    /// avx and avx2; the rest as [`chunk`].
-    #[target_feature(enable = "avx,avx2")]
-    unsafe fn chunk_avx2(
-        pc: Piece,
-        sum: Option<&mut [ForceData]>,
-        s: Particles,
-        params: &PairParams,
-        update_history: bool,
-    ) {
-        chunk::<Avx2>(pc, sum, s, params, update_history)
-    }
+    entry!(chunk_avx512, "avx512f,avx512dq", Avx512);
+    entry!(chunk_avx2, "avx,avx2", Avx2);
 
     /// The pairs of one piece: first which of them touch (one at a time, the kernel's own
     /// test [`batch::touching`] on the same operations, so the same answer); then the
