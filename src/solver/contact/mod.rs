@@ -252,6 +252,23 @@ pub fn surfaces_intersect(
 }
 
 #[cfg(test)]
+mod history_tests {
+    use super::ContactHistory;
+
+    /// Only the all-+0.0 history counts as zero: a -0.0 component is a bit set.
+    #[test]
+    fn all_bits_zero_tells_signed_zeros_apart() {
+        assert!(ContactHistory::default().all_bits_zero());
+        let mut h = ContactHistory::default();
+        h.r_torque[2] = -0.0;
+        assert!(h == ContactHistory::default() && !h.all_bits_zero());
+        h.r_torque[2] = 0.0;
+        h.shear[0] = 5e-324;
+        assert!(!h.all_bits_zero());
+    }
+}
+
+#[cfg(test)]
 pub(crate) mod test_support {
     use super::*;
     use crate::spec::{Material, Models, NormalModel, TangentialModel};

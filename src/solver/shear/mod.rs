@@ -642,6 +642,38 @@ mod tests {
     use crate::packing::loose_packing;
     use crate::spec::RollingModel;
 
+    /// A particle's plate records survive the checkpoint form (a count and 8 fixed slots)
+    /// unchanged, in order, and a record count beyond 8 is not read past the slots.
+    #[test]
+    fn wall_slots_round_trip_through_the_checkpoint_form() {
+        let rec = |tri: u32, s: f64| TriContactRecord {
+            mesh: (tri % 2) as u8,
+            tri,
+            keep: tri % 3 == 0,
+            hist: crate::solver::contact::ContactHistory {
+                shear: [s, -0.0, 1e-300],
+                r_torque: [-s, 0.0, f64::MIN_POSITIVE],
+            },
+            force: [s; 3],
+            torque: [-s; 3],
+            face: tri % 2 == 0,
+        };
+        let w = WallSlots {
+            rec: vec![rec(7, 1.5), rec(3, -2.25), rec(12, 3.0)],
+        };
+        let bytes = rmp_serde::to_vec(&w).unwrap();
+        let back: WallSlots = rmp_serde::from_slice(&bytes).unwrap();
+        assert_eq!(back.rec, w.rec);
+        let bits = |w: &WallSlots| rmp_serde::to_vec(w).unwrap();
+        assert_eq!(bits(&back), bytes);
+        let fixed = FixedSlots {
+            n: 200,
+            ..FixedSlots::from(w)
+        };
+        assert_eq!(WallSlots::from(fixed).rec.len(), MAX_WALL_CONTACTS);
+        assert!(WallSlots::from(FixedSlots::default()).rec.is_empty());
+    }
+
     /// Every piece of state a step carries to the next (particles, forces, rotations, pair
     /// list with histories, wall contact slots, plates, servo, rebuild state) as bytes,
     /// f64 as their bits.

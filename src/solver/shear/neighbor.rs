@@ -260,6 +260,27 @@ mod tests {
 
     use proptest::prelude::*;
 
+    /// `resize_snug` keeps the values, the length asked for, and at most about 1/8 spare,
+    /// growing or shrinking.
+    #[test]
+    fn snug_resize_keeps_values_and_little_spare() {
+        let mut v: Vec<u64> = (0..1000).collect();
+        v.reserve(7000);
+        resize_snug(&mut v, 1200);
+        assert_eq!(v.len(), 1200);
+        assert!(v[..1000].iter().enumerate().all(|(i, &x)| x == i as u64));
+        assert!(v[1000..].iter().all(|&x| x == 0));
+        assert!(v.capacity() <= 1200 + 2 * spare(1200), "{}", v.capacity());
+        resize_snug(&mut v, 100);
+        assert_eq!(v.len(), 100);
+        assert!(v.capacity() <= 100 + 2 * spare(100), "{}", v.capacity());
+        for n in [101, 5000, 5001, 5100] {
+            resize_snug(&mut v, n);
+            assert_eq!(v.len(), n);
+            assert!(v.capacity() >= n && v.capacity() <= n + 2 * spare(n));
+        }
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig {
             cases: 300,
