@@ -649,14 +649,14 @@ mod tests {
         let rec = |tri: u32, s: f64| TriContactRecord {
             mesh: (tri % 2) as u8,
             tri,
-            keep: tri % 3 == 0,
+            keep: tri.is_multiple_of(3),
             hist: crate::solver::contact::ContactHistory {
                 shear: [s, -0.0, 1e-300],
                 r_torque: [-s, 0.0, f64::MIN_POSITIVE],
             },
             force: [s; 3],
             torque: [-s; 3],
-            face: tri % 2 == 0,
+            face: tri.is_multiple_of(2),
         };
         let w = WallSlots {
             rec: vec![rec(7, 1.5), rec(3, -2.25), rec(12, 3.0)],
