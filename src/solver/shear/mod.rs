@@ -23,7 +23,7 @@ mod walls;
 pub use observe::{PlateRecord, Snapshot};
 pub use pairs::KernelPath;
 
-use super::contact::{ContactData, ForceData};
+use super::contact::{moved_beyond_half_skin, ContactData, ForceData};
 use super::integrate::{Kick, NveSphere};
 use super::material::{sphere_mass, PairParams};
 use super::trimesh::{TriContactRecord, TriMesh};
@@ -403,7 +403,11 @@ impl ShearSim {
         let nve = self.nve;
         let dt = self.nve.dtv;
         let kick = &self.kick;
-        self.x
+        let (xhold, skin) = (&self.xhold, self.case.skin);
+        // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
+        // (some atom moved more than skin/2 since the last build)
+        let moved = self
+            .x
             .par_iter_mut()
             .zip(self.v.par_iter_mut())
             .zip(self.omega.par_iter_mut())
@@ -411,16 +415,18 @@ impl ShearSim {
             .zip(self.rotation.par_iter_mut())
             .with_min_len(LIGHT_CHUNK)
             .enumerate()
-            .for_each(|(i, ((((x, v), w), (f, t)), rot))| {
+            .map(|(i, ((((x, v), w), (f, t)), rot))| {
                 nve.initial_kicked(x, v, w, *f, *t, kick[i]);
                 for k in 0..3 {
                     rot[k] += w[k] * dt;
                 }
-            });
+                moved_beyond_half_skin(*x, xhold[i], skin)
+            })
+            .reduce(|| false, |a, b| a | b);
         self.lap(|p| &mut p.integrate);
         self.move_plates();
         self.lap(|p| &mut p.plates);
-        if self.decide_rebuild() {
+        if self.decide_rebuild(moved) {
             self.rebuild()?;
         } else {
             // FixMesh::pre_force on a step without rebuild: a plate whose nodes moved more
@@ -470,13 +476,9 @@ impl ShearSim {
         let params = &self.params;
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
         // pair forces: each pair writes its own history, force slot and state
-        pairs::pass(
+        let sums = pairs::pass(
             self.kernel,
             &self.nl.pairs,
-            pairs::Csr {
-                start: &self.nl.start,
-                entries: &self.nl.entries,
-            },
             &mut self.nl.hist,
             &mut self.pair_force,
             &mut self.pair_state,
@@ -497,6 +499,11 @@ impl ShearSim {
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
         let acc = &self.acc;
+        let pf = &self.pair_force;
+        let csr = pairs::Csr {
+            start: &nl.start,
+            entries: &nl.entries,
+        };
         let pd = &self.pair_damp;
         let implicit = self.implicit;
         let torsion = params.torsion_torque;
@@ -541,11 +548,7 @@ impl ShearSim {
                 }
             }
             // the pair sums (pairs::pass)
-            let a = &acc[q];
-            for c in 0..3 {
-                f[c] += a.delta_f[c];
-                t[c] += a.delta_torque[c];
-            }
+            pairs::add_sums(sums, q, csr, acc, pf, f, t);
             // a particle without plate candidates holds no records
             // (`drop_records_without_candidates`): nothing to mark, test or clean up
             if walls.cstart[q] == walls.cstart[q + 1] {

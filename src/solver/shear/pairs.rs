@@ -15,7 +15,7 @@
 //! results do not depend on the thread count.
 
 use super::neighbor::Pair;
-use super::{pair_contact, PairContact, PairDamp, PairState, HEAVY_CHUNK};
+use super::{pair_contact, PairContact, PairDamp, PairState};
 use crate::error::{Error, Result};
 use crate::solver::contact::{surfaces_intersect, ContactHistory, ForceData};
 use crate::solver::material::PairParams;
@@ -132,14 +132,14 @@ fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &Fo
 }
 
 /// Evaluates every listed pair: its state, (when `update_history`) its history and its force
-/// and torque increments `out` (zero when apart), and adds the increments to the per-particle
-/// sums `acc` in pair order. With one thread the sums are made as the pairs are evaluated;
-/// with more, the contacts are evaluated in parallel over fixed pieces and the sums made
-/// afterwards, per particle over its pairs in pair order (the CSR, in parallel over
-/// particles). Both give the same bits. The per-pair increments `out` are written by the
-/// scalar path, when `record`, and when more than one thread runs (the parallel pass sums
-/// from them); the serial AVX-512 pass otherwise adds them straight to `acc` and neither
-/// allocates nor writes `out` (1.1 MB of writes per step saved on the fast state).
+/// and torque increments (zero when apart). With one thread the increments are added to the
+/// per-particle sums `acc` in pair order as the pairs are evaluated ([`Sums::Accumulated`]);
+/// with more, the contacts are evaluated in parallel over fixed pieces, their increments
+/// written to `out`, and each particle's sum is made afterwards by [`add_sums`], per particle
+/// over its pairs in pair order (the CSR), inside the caller's parallel loop over particles
+/// ([`Sums::PerPair`]). Both give the same bits. `out` is also written when `record`
+/// (observers); a serial pass otherwise neither allocates nor writes it (1.1 MB of writes per
+/// step saved on the fast state).
 ///
 /// Pair order is the order of the per-particle (CSR) sums this pass replaced, so the results
 /// are the bits of before (a whole ci run, native.csv identical to the previous binary's).
@@ -151,7 +151,6 @@ fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &Fo
 pub(super) fn pass(
     path: KernelPath,
     pairs: &[Pair],
-    csr: Csr,
     hist: &mut [ContactHistory],
     out: &mut Vec<(ForceData, ForceData)>,
     state: &mut [PairState],
@@ -161,7 +160,7 @@ pub(super) fn pass(
     params: &PairParams,
     update_history: bool,
     record: bool,
-) {
+) -> Sums {
     let np = pairs.len();
     assert!(acc.len() == s.x.len() && state.len() == np && hist.len() == np);
     assert!(damp.is_empty() || damp.len() == np);
@@ -170,7 +169,6 @@ pub(super) fn pass(
         "the {} path on a CPU without it",
         path.name()
     );
-    acc.fill(ForceData::default());
     let serial = rayon::current_num_threads() == 1;
     // `out` is allocated only when written (a serial pass without `record` never does: 96
     // bytes per listed pair, about 430 B per particle, not held)
@@ -198,32 +196,61 @@ pub(super) fn pass(
             damp: damps.get_mut(k).map(std::mem::take).unwrap_or_default(),
         });
     if serial {
+        acc.fill(ForceData::default());
         for pc in pieces {
             piece(path, pc, Some(&mut *acc), s, params, update_history);
         }
-        return;
+        return Sums::Accumulated;
     }
     let pieces: Vec<Piece> = pieces.collect();
     pieces
         .into_par_iter()
         .for_each(|pc| piece(path, pc, None, s, params, update_history));
-    // Each particle's sum over its pairs in increasing pair index (the CSR `entries` are in
-    // that order): the additions of the serial pass, in its order, so the same bits, made in
-    // parallel over particles. Apart pairs add zeros: no bit changes (a sum started at +0 is
-    // never -0).
-    acc.par_iter_mut()
-        .enumerate()
-        .with_min_len(HEAVY_CHUNK)
-        .for_each(|(q, a)| {
+    Sums::PerPair
+}
+
+/// Where [`pass`] left the particles' pair sums.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Sums {
+    /// In `acc`, made in pair order as the pairs were evaluated (one thread).
+    Accumulated,
+    /// Per pair in `out`: [`add_sums`] makes each particle's sum.
+    PerPair,
+}
+
+/// Adds particle `q`'s pair sum to its force `f` and torque `t` (both +0 before). `PerPair`:
+/// the increments of its pairs in increasing pair index (the CSR `entries` are in that
+/// order), the additions of the serial pass in its order, so the same bits; apart pairs add
+/// zeros, which change no bit (a sum started at +0 is never -0).
+#[inline(always)]
+pub(super) fn add_sums(
+    sums: Sums,
+    q: usize,
+    csr: Csr,
+    acc: &[ForceData],
+    out: &[(ForceData, ForceData)],
+    f: &mut V3,
+    t: &mut V3,
+) {
+    match sums {
+        Sums::Accumulated => {
+            let a = &acc[q];
+            for c in 0..3 {
+                f[c] += a.delta_f[c];
+                t[c] += a.delta_torque[c];
+            }
+        }
+        Sums::PerPair => {
             for &(k, is_i) in &csr.entries[csr.start[q] as usize..csr.start[q + 1] as usize] {
                 let o = &out[k as usize];
                 let d = if is_i { &o.0 } else { &o.1 };
                 for c in 0..3 {
-                    a.delta_f[c] += d.delta_f[c];
-                    a.delta_torque[c] += d.delta_torque[c];
+                    f[c] += d.delta_f[c];
+                    t[c] += d.delta_torque[c];
                 }
             }
-        });
+        }
+    }
 }
 
 /// Pairs per piece of the pass.

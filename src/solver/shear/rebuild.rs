@@ -3,33 +3,24 @@
 //! (periodic wrap, pair list, plates' elements wrapped and refreshed), and the per-particle
 //! plate-triangle candidates built with it.
 
-use super::{image_shift, ShearSim, LIGHT_CHUNK};
+use super::{image_shift, ShearSim};
 use crate::error::{Error, Result};
-use crate::solver::contact::moved_beyond_half_skin;
 use crate::solver::vec3::V3;
 use rayon::prelude::*;
 
 impl ShearSim {
     /// `Neighbor::decide` with `delay 0`: a rebuild a plate asked for at the previous step
     /// (`next_reneighbor`), else every `neighbor.every` steps since the last build, and with
-    /// `check` only if an atom moved more than skin/2 (`check_distance`).
-    pub(super) fn decide_rebuild(&mut self) -> bool {
+    /// `check` only if an atom moved more than skin/2 (`check_distance`): `particles_moved`,
+    /// found by the drift of the same step ([`ShearSim::step`]; the positions do not change
+    /// between the drift and this decision).
+    pub(super) fn decide_rebuild(&mut self, particles_moved: bool) -> bool {
         if self.mesh_rebuild_pending {
             return true;
         }
         self.ago += 1;
         let sched = &self.case.neighbor;
-        self.ago.is_multiple_of(sched.every) && (!sched.check || self.particles_moved())
-    }
-
-    /// `Neighbor::check_distance`: some atom moved more than skin/2 since the last build.
-    pub(super) fn particles_moved(&self) -> bool {
-        let skin = self.case.skin;
-        self.x
-            .par_iter()
-            .zip(self.xhold.par_iter())
-            .with_min_len(LIGHT_CHUNK)
-            .any(|(x, h)| moved_beyond_half_skin(*x, *h, skin))
+        self.ago.is_multiple_of(sched.every) && (!sched.check || particles_moved)
     }
 
     /// `MultiNodeMesh::decideRebuild` for both plates: a node moved more than skin/2 since the

@@ -95,7 +95,8 @@ impl ShearSim {
         }
         self.step += 1;
         self.move_plates();
-        if self.decide_rebuild() {
+        // `neighbor.check` is off here (refused above): no particle test
+        if self.decide_rebuild(false) {
             self.rebuild_plates();
         } else {
             self.mesh_rebuild_pending = self.plates_moved();
