@@ -187,15 +187,27 @@ fn judge(points: &[Point], stand_ins: &[Point]) -> Vec<JudgedPoint> {
                     ),
                 );
             };
+            // checked against the code's other stand-ins, then the other code's stable or
+            // converged results at the point (LIGGGHTS at dt/4 checking a native stand-in)
+            let other_code = stand_ins.iter().filter(|q| {
+                q.code != p.code && q.stage == p.stage && q.mu_r == p.mu_r && q.eta_r == p.eta_r
+            });
             let checks: Vec<String> = rest
                 .iter()
+                .copied()
+                .chain(other_code)
                 .map(|q| {
                     format!(
-                        "{} {} ({:.4} ± {:.4})",
+                        "{} {}{} ({:.4} ± {:.4})",
                         if within_cis(c.mu, c.mu_ci95, q.mu, q.mu_ci95) {
                             "agrees with"
                         } else {
                             "DIFFERS from"
+                        },
+                        if q.code == p.code {
+                            String::new()
+                        } else {
+                            format!("{} ", q.code)
                         },
                         q.source,
                         q.mu,
@@ -761,6 +773,10 @@ mod tests {
             point(0.5, 0.60, true, "epsd_implicit"),
             point(0.5, 0.61, true, "epsd dt/4"),
             point(0.5, 0.70, true, "epsd dt/8"),
+            Point {
+                code: Code::Liggghts,
+                ..point(0.5, 0.605, true, "epsd dt/4 (LIGGGHTS)")
+            },
         ];
         let j = judge(&points, &stand_ins);
         assert!(!j[0].substituted && j[0].point.as_ref().unwrap().mu == 0.5);
@@ -768,7 +784,10 @@ mod tests {
         assert!(
             j[1].note.contains("from epsd_implicit")
                 && j[1].note.contains("agrees with epsd dt/4")
-                && j[1].note.contains("DIFFERS from epsd dt/8"),
+                && j[1].note.contains("DIFFERS from epsd dt/8")
+                && j[1]
+                    .note
+                    .contains("agrees with liggghts epsd dt/4 (LIGGGHTS)"),
             "{}",
             j[1].note
         );
