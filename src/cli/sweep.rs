@@ -160,17 +160,12 @@ fn stage_line(r: &RunResult) -> String {
     r.stages
         .iter()
         .map(|s| {
-            let f = |c: &Option<crate::compare::Steady>| {
-                c.as_ref()
-                    .map(|c| format!("{:.3}", c.mu))
-                    .unwrap_or("-".into())
-            };
-            format!(
-                "v {} m/s: mu LIGGGHTS {} native {}",
-                s.speed,
-                f(&s.liggghts),
-                f(&s.native)
-            )
+            // only the codes that ran: "mu native 0.511", "mu LIGGGHTS 0.52, native 0.51"
+            let codes: Vec<String> = [("LIGGGHTS", &s.liggghts), ("native", &s.native)]
+                .into_iter()
+                .filter_map(|(name, c)| c.as_ref().map(|c| format!("{name} {:.3}", c.mu)))
+                .collect();
+            format!("v {} m/s: mu {}", s.speed, codes.join(", "))
         })
         .collect::<Vec<_>>()
         .join("; ")
