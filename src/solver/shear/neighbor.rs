@@ -90,13 +90,13 @@ impl NeighborList {
         let cy = |v: f64| (((v - ymin) / cut).floor() as usize).min(ny - 1);
         // counting sort of particles into cells
         let ncell = nx * ny * nz;
-        let cell_of: Vec<usize> = x
+        let cell_of: Vec<u32> = x
             .iter()
-            .map(|p| (cx(p[0]) * ny + cy(p[1])) * nz + cz(p[2]))
+            .map(|p| ((cx(p[0]) * ny + cy(p[1])) * nz + cz(p[2])) as u32)
             .collect();
         let mut head = vec![0u32; ncell + 1];
         for &c in &cell_of {
-            head[c + 1] += 1;
+            head[c as usize + 1] += 1;
         }
         for c in 0..ncell {
             head[c + 1] += head[c];
@@ -104,28 +104,36 @@ impl NeighborList {
         let mut fill = head.clone();
         let mut members = vec![0u32; n];
         for (p, &c) in cell_of.iter().enumerate() {
-            members[fill[c] as usize] = p as u32;
-            fill[c] += 1;
+            members[fill[c as usize] as usize] = p as u32;
+            fill[c as usize] += 1;
         }
+        drop((cell_of, fill));
         // about the last list's length: the list changes little between builds (a capacity
         // of 8 per particle held 256 bytes per particle for 140 used)
         let mut new_pairs: Vec<Pair> =
             Vec::with_capacity(self.pairs.len() + spare(self.pairs.len()));
-        // The histories to carry over, and nothing else: (pair key, its i, history) of the
-        // listed pairs whose history has a bit set (a touching pair with an all-zero history
-        // gets the same bits as a new one), in list order. The old list is freed before the
-        // new history array is made: old and new lists side by side were the peak of the
-        // solver's memory (about 370 bytes per particle more than it holds).
-        let key = |p: &Pair| (p.i.min(p.j), p.i.max(p.j));
-        let carried: Vec<((u32, u32), u32, ContactHistory)> = self
-            .pairs
-            .iter()
-            .zip(&self.hist)
-            .filter(|(_, h)| !h.all_bits_zero())
-            .map(|(p, h)| (key(p), p.i, *h))
-            .collect();
+        // The histories to carry over, and nothing else: those of the listed pairs whose
+        // history has a bit set (a touching pair with an all-zero history gets the same bits
+        // as a new one), in list order, with their pair's (i, j); the histories compacted in
+        // place in the old array, whose tail is then returned, and the old list and
+        // per-particle index freed, before the new list is made. Measured at 250,000
+        // particles (peak RSS growth of the solver for 814 bytes per particle held): old
+        // and new lists side by side about 1,180; a separate copy of the carried histories
+        // beside the old list 1,034; this 890 (`verify bench`).
+        let key = |(i, j): (u32, u32)| (i.min(j), i.max(j));
+        let carry = |h: &ContactHistory| !h.all_bits_zero();
+        let mut carried_ij: Vec<(u32, u32)> =
+            Vec::with_capacity(self.hist.iter().filter(|h| carry(h)).count());
+        let mut carried_hist = std::mem::take(&mut self.hist);
+        for k in 0..carried_hist.len() {
+            if carry(&carried_hist[k]) {
+                carried_hist[carried_ij.len()] = carried_hist[k];
+                carried_ij.push((self.pairs[k].i, self.pairs[k].j));
+            }
+        }
+        carried_hist.truncate(carried_ij.len());
+        carried_hist.shrink_to_fit();
         self.pairs = Vec::new();
-        self.hist = Vec::new();
         self.entries = Vec::new();
         let mut touching: Vec<bool> = Vec::with_capacity(new_pairs.capacity());
         let mut cand: Vec<(u32, [f64; 3], bool)> = Vec::new();
@@ -209,11 +217,12 @@ impl NeighborList {
             if !touch {
                 continue;
             }
-            while k < carried.len() && carried[k].0 < key(p) {
+            let now = key((p.i, p.j));
+            while k < carried_ij.len() && key(carried_ij[k]) < now {
                 k += 1;
             }
-            if k < carried.len() && carried[k].0 == key(p) {
-                let (_, old_i, h) = carried[k];
+            if k < carried_ij.len() && key(carried_ij[k]) == now {
+                let (old_i, h) = (carried_ij[k].0, carried_hist[k]);
                 // a pair that started or stopped crossing the seam turned round: its history
                 // is relative (i against j), so it changes sign
                 *nh = if old_i == p.i {
@@ -226,7 +235,7 @@ impl NeighborList {
                 };
             }
         }
-        drop(touching);
+        drop((touching, carried_ij, carried_hist));
         if new_pairs.capacity() > new_pairs.len() + 2 * spare(new_pairs.len()) {
             new_pairs.shrink_to(new_pairs.len() + spare(new_pairs.len()));
         }
