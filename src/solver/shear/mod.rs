@@ -499,12 +499,18 @@ impl ShearSim {
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
         let acc = &self.acc;
-        let pf = &self.pair_force;
         let csr = pairs::Csr {
             start: &nl.start,
             entries: &nl.entries,
         };
         let pd = &self.pair_damp;
+        let sum = pairs::PairSums {
+            sums,
+            csr,
+            acc,
+            out: &self.pair_force,
+            state: &self.pair_state,
+        };
         let implicit = self.implicit;
         let torsion = params.torsion_torque;
         let walls = walls::WallContext {
@@ -526,6 +532,35 @@ impl ShearSim {
             update_history,
             trace: log::log_enabled!(log::Level::Trace),
         };
+        if sums == pairs::Sums::Accumulated && !implicit {
+            // One thread without dashpot sums: the pair sums are the particles' forces
+            // (`0 + a` is `a` bit for bit: a sum started at +0 is never -0), and only the
+            // particles with plate candidates (about 11 % on the fast state) are visited,
+            // their plate forces added in particle order as the loop below adds them (the
+            // other particles add +0, which changes no bit). Measured on the fast state
+            // (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per particle-step.
+            for ((f, t), a) in self.f.iter_mut().zip(self.torque.iter_mut()).zip(acc) {
+                *f = a.delta_f;
+                *t = a.delta_torque;
+            }
+            let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
+            let mut none = ([0.0; 6], [0.0; 3]);
+            for q in 0..self.f.len() {
+                if walls.cstart[q] == walls.cstart[q + 1] {
+                    continue;
+                }
+                let mut wf = ([0.0; 3], [0.0; 3]);
+                let (f, t) = (&mut self.f[q], &mut self.torque[q]);
+                if !walls.particle(q, &mut self.wall[q], f, t, &mut wf, &mut none) {
+                    return Err(too_many_wall_contacts(self.step));
+                }
+                for c in 0..3 {
+                    tb[c] += wf.0[c];
+                    tt[c] += wf.1[c];
+                }
+            }
+            return self.keep_plate_forces(tb, tt);
+        }
         let failed = std::sync::atomic::AtomicBool::new(false);
         let body = |q: usize,
                     f: &mut V3,
@@ -548,7 +583,7 @@ impl ShearSim {
                 }
             }
             // the pair sums (pairs::pass)
-            pairs::add_sums(sums, q, csr, acc, pf, f, t);
+            sum.add(q, f, t);
             // a particle without plate candidates holds no records
             // (`drop_records_without_candidates`): nothing to mark, test or clean up
             if walls.cstart[q] == walls.cstart[q + 1] {
@@ -577,10 +612,7 @@ impl ShearSim {
                 });
         }
         if failed.into_inner() {
-            return Err(Error::Solver {
-                step: self.step,
-                msg: format!("a particle holds more than {MAX_WALL_CONTACTS} mesh contacts"),
-            });
+            return Err(too_many_wall_contacts(self.step));
         }
         let mut tb = [0.0; 3];
         let mut tt = [0.0; 3];
@@ -590,9 +622,14 @@ impl ShearSim {
                 tt[c] += t[c];
             }
         }
+        self.keep_plate_forces(tb, tt)
+    }
+
+    /// Keeps the plate forces (bottom, top) of this evaluation; ends the force phase.
+    fn keep_plate_forces(&mut self, tb: V3, tt: V3) -> Result<()> {
         self.bottom_force = tb;
         self.top_force = tt;
-        lap(&mut self.phases, |p| &mut p.sum_walls);
+        self.lap(|p| &mut p.sum_walls);
         if !(tt.iter().chain(tb.iter()).all(|v| v.is_finite())) {
             return Err(Error::Solver {
                 step: self.step,
@@ -600,6 +637,14 @@ impl ShearSim {
             });
         }
         Ok(())
+    }
+}
+
+/// A particle would hold more plate contact records than the slots allow.
+fn too_many_wall_contacts(step: u64) -> Error {
+    Error::Solver {
+        step,
+        msg: format!("a particle holds more than {MAX_WALL_CONTACTS} mesh contacts"),
     }
 }
 
