@@ -479,6 +479,10 @@ impl ShearSim {
         let sums = pairs::pass(
             self.kernel,
             &self.nl.pairs,
+            pairs::Csr {
+                start: &self.nl.start,
+                entries: &self.nl.entries,
+            },
             &mut self.nl.hist,
             &mut self.pair_force,
             &mut self.pair_state,
@@ -505,7 +509,7 @@ impl ShearSim {
         };
         let pd = &self.pair_damp;
         let sum = pairs::PairSums {
-            sums,
+            sums: &sums,
             csr,
             acc,
             out: &self.pair_force,
@@ -585,10 +589,9 @@ impl ShearSim {
             // the pair sums (pairs::pass)
             sum.add(q, f, t);
             // a particle without plate candidates holds no records
-            // (`drop_records_without_candidates`): nothing to mark, test or clean up
-            if walls.cstart[q] == walls.cstart[q + 1] {
-                *wf = ([0.0; 3], [0.0; 3]);
-            } else if !walls.particle(q, slots, f, t, wf, imp) {
+            // (`drop_records_without_candidates`): nothing to mark, test or clean up, and
+            // no plate force (its `wf` is not read)
+            if walls.cstart[q] != walls.cstart[q + 1] && !walls.particle(q, slots, f, t, wf, imp) {
                 failed.store(true, std::sync::atomic::Ordering::Relaxed);
             }
         };
@@ -614,9 +617,14 @@ impl ShearSim {
         if failed.into_inner() {
             return Err(too_many_wall_contacts(self.step));
         }
+        // the plate forces in particle order (the particles without candidates would add +0,
+        // which changes no bit)
         let mut tb = [0.0; 3];
         let mut tt = [0.0; 3];
-        for (b, t) in &self.wall_force {
+        for (q, (b, t)) in self.wall_force.iter().enumerate() {
+            if self.wall_start[q] == self.wall_start[q + 1] {
+                continue;
+            }
             for c in 0..3 {
                 tb[c] += b[c];
                 tt[c] += t[c];

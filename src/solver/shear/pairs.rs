@@ -11,8 +11,8 @@
 //! [`batch::pair`]: crate::solver::contact::batch::pair
 //!
 //! Each pair writes only its own history, state and force slot, so the contacts are evaluated
-//! in parallel; the particles' sums are then made serially in pair order ([`pass`]), so the
-//! results do not depend on the thread count.
+//! in parallel; every particle's sum is made in pair order whatever the thread count
+//! ([`pass`]), so the results do not depend on it.
 
 use super::neighbor::Pair;
 use super::{pair_contact, PairContact, PairDamp, PairState};
@@ -132,25 +132,31 @@ fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &Fo
 }
 
 /// Evaluates every listed pair: its state, (when `update_history`) its history and its force
-/// and torque increments (zero when apart). With one thread the increments are added to the
-/// per-particle sums `acc` in pair order as the pairs are evaluated ([`Sums::Accumulated`]);
-/// with more, the contacts are evaluated in parallel over fixed pieces, their increments
-/// written to `out`, and each particle's sum is made afterwards by [`PairSums::add`], per particle
-/// over its pairs in pair order (the CSR), inside the caller's parallel loop over particles
-/// ([`Sums::PerPair`]). Both give the same bits. `out` is also written when `record`
-/// (observers); a serial pass otherwise neither allocates nor writes it (1.1 MB of writes per
-/// step saved on the fast state).
+/// and torque increments (zero when apart), each particle's increments summed in pair order.
+/// With one thread they are added to the per-particle sums `acc` as the pairs are evaluated
+/// ([`Sums::Accumulated`]). With more, the pieces are grouped in one block of consecutive
+/// pieces per thread, evaluated in parallel block by block, each block's pieces in order: a
+/// particle whose pairs all lie in one block gets its increments added to `acc` there, in
+/// pair order, by that block alone; the others' increments are written to their side of the
+/// pair's `out` slot and summed afterwards by [`PairSums::add`] over the particle's pairs in
+/// pair order (the CSR), inside the caller's parallel loop over particles
+/// ([`Sums::Blocks`]). Every sum is the same sequence of additions as the serial one: the same
+/// bits for any thread count. Particles are numbered by height (`loose_packing`) and the
+/// list is ordered by the lower index, so most particles' partners lie in their own block:
+/// measured on the fast state with 2 threads, 94 % of the particles (with the generation
+/// order, about half). `out` is also written whole when `record` (observers); a serial pass
+/// otherwise neither allocates nor writes it.
 ///
 /// Pair order is the order of the per-particle (CSR) sums this pass replaced, so the results
-/// are the bits of before (a whole ci run, native.csv identical to the previous binary's).
-/// Per-block sums added up per particle would parallelise the sums but re-associate almost
-/// every particle's sum, since a particle's partners lie all over the pair list: measured,
-/// the quick night's replay at (1, 0.5) then fell short of the chaos envelope in one window
-/// (11 of 12 steps).
+/// are the bits of before (a whole ci run, native.csv identical to the previous binary's,
+/// 1 and 2 threads). Per-block sums added up per particle would re-associate the sums of
+/// the particles with pairs in several blocks: measured, the quick night's replay at (1,
+/// 0.5) then fell short of the chaos envelope in one window (11 of 12 steps).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn pass(
     path: KernelPath,
     pairs: &[Pair],
+    csr: Csr,
     hist: &mut [ContactHistory],
     out: &mut Vec<(ForceData, ForceData)>,
     state: &mut [PairState],
@@ -162,8 +168,10 @@ pub(super) fn pass(
     record: bool,
 ) -> Sums {
     let np = pairs.len();
-    assert!(acc.len() == s.x.len() && state.len() == np && hist.len() == np);
+    let n = s.x.len();
+    assert!(acc.len() == n && state.len() == np && hist.len() == np);
     assert!(damp.is_empty() || damp.len() == np);
+    assert!(csr.start.len() == n + 1 && csr.entries.len() == 2 * np);
     assert!(
         path.runs_here(),
         "the {} path on a CPU without it",
@@ -196,34 +204,154 @@ pub(super) fn pass(
             out_apart: record,
             damp: damps.get_mut(k).map(std::mem::take).unwrap_or_default(),
         });
+    acc.fill(ForceData::default());
     if serial {
-        acc.fill(ForceData::default());
         for pc in pieces {
-            piece(path, pc, Some(&mut *acc), s, params, update_history);
+            piece(
+                path,
+                pc,
+                &mut Sink::Acc(&mut *acc),
+                s,
+                params,
+                update_history,
+            );
         }
         return Sums::Accumulated;
     }
+    // one block of consecutive pieces per thread; a particle whose pairs all lie in one
+    // block is summed there, in pair order
     let pieces: Vec<Piece> = pieces.collect();
-    pieces
-        .into_par_iter()
-        .for_each(|pc| piece(path, pc, None, s, params, update_history));
-    Sums::PerPair
+    let per_block = pieces.len().div_ceil(rayon::current_num_threads()).max(1);
+    let block_of = |k: u32| k as usize / CHUNK / per_block;
+    let own: Vec<bool> = (0..n)
+        .map(|q| {
+            let (a, b) = (csr.start[q] as usize, csr.start[q + 1] as usize);
+            a == b || block_of(csr.entries[a].0) == block_of(csr.entries[b - 1].0)
+        })
+        .collect();
+    let shared = SharedAcc::new(acc);
+    let mut blocks: Vec<Vec<Piece>> = Vec::new();
+    let mut pieces = pieces.into_iter().peekable();
+    while pieces.peek().is_some() {
+        blocks.push(pieces.by_ref().take(per_block).collect());
+    }
+    blocks.into_par_iter().for_each(|block| {
+        let mut sink = Sink::Block {
+            acc: shared,
+            own: &own,
+        };
+        for pc in block {
+            piece(path, pc, &mut sink, s, params, update_history);
+        }
+    });
+    Sums::Blocks(own)
+}
+
+/// Where a piece's increments go.
+enum Sink<'a> {
+    /// Every particle's sum (one block: the serial pass).
+    Acc(&'a mut [ForceData]),
+    /// The sums of the particles whose pairs all lie in this piece's block (`own`); the
+    /// others' side of the pair goes to the pair's `out` slot, summed after the pass.
+    Block { acc: SharedAcc<'a>, own: &'a [bool] },
+}
+
+impl Sink<'_> {
+    /// Delivers pair `k`'s increments `di` (to its `i`) and `dj` (to its `j`); `out` is the
+    /// pair's slot when held, written whole when `record`.
+    #[inline(always)]
+    fn deliver(
+        &mut self,
+        i: usize,
+        j: usize,
+        di: &ForceData,
+        dj: &ForceData,
+        out: Option<&mut (ForceData, ForceData)>,
+        record: bool,
+    ) {
+        match self {
+            Sink::Acc(acc) => accumulate(acc, i, j, di, dj),
+            Sink::Block { acc, own } => {
+                for (q, d) in [(i, di), (j, dj)] {
+                    if own[q] {
+                        // SAFETY: q's pairs all lie in this block, which one thread
+                        // evaluates piece after piece: no other thread adds to q's sum
+                        unsafe { acc.add(q, d) }
+                    }
+                }
+                if let Some(o) = out {
+                    if record {
+                        *o = (*di, *dj);
+                    } else {
+                        if !own[i] {
+                            o.0 = *di;
+                        }
+                        if !own[j] {
+                            o.1 = *dj;
+                        }
+                    }
+                }
+                return;
+            }
+        }
+        if let (Some(o), true) = (out, record) {
+            *o = (*di, *dj);
+        }
+    }
+}
+
+/// The particles' sums shared by the blocks of a parallel pass, each sum added to by one
+/// block only ([`Sink::Block`]).
+#[derive(Clone, Copy)]
+struct SharedAcc<'a> {
+    ptr: *mut ForceData,
+    len: usize,
+    _sums: std::marker::PhantomData<&'a mut [ForceData]>,
+}
+
+// SAFETY: the blocks write disjoint elements (a particle's sum belongs to one block).
+unsafe impl Send for SharedAcc<'_> {}
+unsafe impl Sync for SharedAcc<'_> {}
+
+impl<'a> SharedAcc<'a> {
+    fn new(acc: &'a mut [ForceData]) -> Self {
+        SharedAcc {
+            ptr: acc.as_mut_ptr(),
+            len: acc.len(),
+            _sums: std::marker::PhantomData,
+        }
+    }
+
+    /// Adds `d` to particle `q`'s sum.
+    ///
+    /// # Safety
+    /// No other thread reads or writes `q`'s sum meanwhile.
+    #[inline(always)]
+    unsafe fn add(&self, q: usize, d: &ForceData) {
+        assert!(q < self.len);
+        let a = &mut *self.ptr.add(q);
+        for c in 0..3 {
+            a.delta_f[c] += d.delta_f[c];
+            a.delta_torque[c] += d.delta_torque[c];
+        }
+    }
 }
 
 /// Where [`pass`] left the particles' pair sums.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub(super) enum Sums {
     /// In `acc`, made in pair order as the pairs were evaluated (one thread).
     Accumulated,
-    /// Per touching pair in `out` (an apart pair's slot is not written unless recorded):
-    /// [`PairSums::add`] makes each particle's sum.
-    PerPair,
+    /// Per particle: `true`, in `acc` as above (its pairs all lie in one block); `false`,
+    /// per touching pair in `out`, its side only (an apart pair's slot is not written
+    /// unless recorded), summed by [`PairSums::add`].
+    Blocks(Vec<bool>),
 }
 
 /// What the particles' pair sums are made from after a [`pass`].
 #[derive(Clone, Copy)]
 pub(super) struct PairSums<'a> {
-    pub sums: Sums,
+    pub sums: &'a Sums,
     pub csr: Csr<'a>,
     pub acc: &'a [ForceData],
     pub out: &'a [(ForceData, ForceData)],
@@ -231,11 +359,12 @@ pub(super) struct PairSums<'a> {
 }
 
 impl PairSums<'_> {
-    /// Adds particle `q`'s pair sum to its force `f` and torque `t` (both +0 before). `PerPair`:
-    /// the increments of its touching pairs (`state`) in increasing pair index (the CSR
-    /// `entries` are in that order), the additions of the serial pass in its order, so the same
-    /// bits; the serial pass adds zeros for apart pairs, which change no bit (a sum started at
-    /// +0 is never -0), so skipping them changes none either.
+    /// Adds particle `q`'s pair sum to its force `f` and torque `t` (both +0 before): from
+    /// `acc` where the pass made it; otherwise the increments of its touching pairs (`state`)
+    /// in `out`, in increasing pair index (the CSR `entries` are in that order), the additions
+    /// of the serial pass in its order, so the same bits; the serial pass adds zeros for apart
+    /// pairs, which change no bit (a sum started at +0 is never -0), so skipping them changes
+    /// none either.
     #[inline(always)]
     pub fn add(&self, q: usize, f: &mut V3, t: &mut V3) {
         let PairSums {
@@ -245,15 +374,19 @@ impl PairSums<'_> {
             out,
             state,
         } = *self;
-        match sums {
-            Sums::Accumulated => {
+        let own = match sums {
+            Sums::Accumulated => true,
+            Sums::Blocks(own) => own[q],
+        };
+        match own {
+            true => {
                 let a = &acc[q];
                 for c in 0..3 {
                     f[c] += a.delta_f[c];
                     t[c] += a.delta_torque[c];
                 }
             }
-            Sums::PerPair => {
+            false => {
                 for &(k, is_i) in &csr.entries[csr.start[q] as usize..csr.start[q + 1] as usize] {
                     if state[k as usize].contact == PairContact::Apart {
                         continue;
@@ -289,11 +422,11 @@ pub(super) struct Piece<'a> {
     pub damp: &'a mut [PairDamp],
 }
 
-/// Evaluates one piece on `path`, adding the increments to `sum` in pair order when given.
+/// Evaluates one piece on `path`, its increments delivered to `sink` in pair order.
 fn piece(
     path: KernelPath,
     pc: Piece,
-    sum: Option<&mut [ForceData]>,
+    sink: &mut Sink,
     s: Particles,
     params: &PairParams,
     update_history: bool,
@@ -303,7 +436,6 @@ fn piece(
     assert!((pc.out.is_empty() || pc.out.len() == n) && (pc.damp.is_empty() || pc.damp.len() == n));
     match path {
         KernelPath::Scalar => {
-            let mut sum = sum;
             for k in 0..n {
                 let p = &pc.pairs[k];
                 let (di, dj, st, dm) = scalar_one(p, &mut pc.hist[k], s, params, update_history);
@@ -311,12 +443,8 @@ fn piece(
                 if let Some(d) = pc.damp.get_mut(k) {
                     *d = dm;
                 }
-                if let Some(acc) = sum.as_deref_mut() {
-                    accumulate(acc, p.i as usize, p.j as usize, &di, &dj);
-                }
-                if let Some(o) = pc.out.get_mut(k) {
-                    *o = (di, dj);
-                }
+                let (i, j) = (p.i as usize, p.j as usize);
+                sink.deliver(i, j, &di, &dj, pc.out.get_mut(k), pc.out_apart);
             }
         }
         KernelPath::Avx512 | KernelPath::Avx2 => {
@@ -325,7 +453,7 @@ fn piece(
             // `chunk` asks (checked above); every particle index of a pair is in bounds
             // (the neighbour list is built over these particles).
             unsafe {
-                simd::chunk_on(path, pc, sum, s, params, update_history)
+                simd::chunk_on(path, pc, sink, s, params, update_history)
             }
             #[cfg(not(target_arch = "x86_64"))]
             unreachable!("the SIMD paths are only selected on x86_64")
@@ -381,7 +509,7 @@ fn scalar_one(
 #[cfg(target_arch = "x86_64")]
 mod simd {
     use super::super::{PairContact, PairDamp, PairState};
-    use super::{KernelPath, Particles, Piece, CHUNK};
+    use super::{KernelPath, Particles, Piece, Sink, CHUNK};
     use crate::solver::contact::batch::{self, PairIn};
     use crate::solver::contact::lanes::{F4, F8};
     use crate::solver::contact::{ContactHistory, ForceData};
@@ -539,14 +667,14 @@ mod simd {
     pub(super) unsafe fn chunk_on(
         path: KernelPath,
         pc: Piece,
-        sum: Option<&mut [ForceData]>,
+        sink: &mut Sink,
         s: Particles,
         params: &PairParams,
         update_history: bool,
     ) {
         match path {
-            KernelPath::Avx512 => chunk_avx512(pc, sum, s, params, update_history),
-            KernelPath::Avx2 => chunk_avx2(pc, sum, s, params, update_history),
+            KernelPath::Avx512 => chunk_avx512(pc, sink, s, params, update_history),
+            KernelPath::Avx2 => chunk_avx2(pc, sink, s, params, update_history),
             KernelPath::Scalar => unreachable!("the scalar path has no SIMD chunk"),
         }
     }
@@ -561,12 +689,12 @@ mod simd {
             #[target_feature(enable = $features)]
             unsafe fn $name(
                 pc: Piece,
-                sum: Option<&mut [ForceData]>,
+                sink: &mut Sink,
                 s: Particles,
                 params: &PairParams,
                 update_history: bool,
             ) {
-                chunk::<$width>(pc, sum, s, params, update_history)
+                chunk::<$width>(pc, sink, s, params, update_history)
             }
         };
     }
@@ -588,7 +716,7 @@ mod simd {
     #[inline(always)]
     unsafe fn chunk<E: Eval8>(
         pc: Piece,
-        mut sum: Option<&mut [ForceData]>,
+        sink: &mut Sink,
         s: Particles,
         params: &PairParams,
         update_history: bool,
@@ -601,10 +729,10 @@ mod simd {
             out_apart,
             damp,
         } = pc;
-        let (record, implicit) = (!out.is_empty(), !damp.is_empty());
+        let (held, implicit) = (!out.is_empty(), !damp.is_empty());
         let n = pairs.len();
         assert!(state.len() == n && hist.len() == n && n <= CHUNK);
-        assert!((!record || out.len() == n) && (!implicit || damp.len() == n));
+        assert!((!held || out.len() == n) && (!implicit || damp.len() == n));
         let np = s.x.len();
         assert!(s.v.len() == np && s.omega.len() == np && s.radius.len() == np);
         assert!(s.mass.len() == np);
@@ -677,12 +805,8 @@ mod simd {
                     },
                 );
                 let p = pairs.get_unchecked(k);
-                if let Some(acc) = sum.as_deref_mut() {
-                    super::accumulate(acc, p.i as usize, p.j as usize, &di, &dj);
-                }
-                if record {
-                    out[k] = (di, dj);
-                }
+                let o = if held { Some(&mut out[k]) } else { None };
+                sink.deliver(p.i as usize, p.j as usize, &di, &dj, o, out_apart);
                 let bit = |m: u8| (m >> l) & 1 == 1;
                 debug_assert!(bit(touch));
                 state[k] = PairState {
