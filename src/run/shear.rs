@@ -243,7 +243,8 @@ pub fn shear_lockstep(
     store(dir, "liggghts", &c, &l?)?;
     store(dir, "native", &c, &n?)?;
     let mut nudged = compacted.clone();
-    nudged.position[0][0] = f64::from_bits(nudged.position[0][0].to_bits() + 1);
+    let k = crate::packing::chaos_probe(nudged.position.len());
+    nudged.position[k][0] = f64::from_bits(nudged.position[k][0].to_bits() + 1);
     let pdir = dir.join("perturbed");
     store(
         &pdir,

@@ -8,7 +8,7 @@
 //! `solver::shear::replay`) and advances K steps; after each step its particles, contacts and
 //! plate forces are compared with LIGGGHTS' dump of that step. Step 1 must agree to `rtol`
 //! (1e-12: only the order in which forces are summed differs). Later steps are judged against
-//! a chaos envelope measured in the same run: the native solver against itself with one
+//! a chaos envelope measured in the same run: the native solver against itself with every
 //! particle moved by one ulp.
 //!
 //! Data flow: request -> deck + LIGGGHTS run -> dumps -> native replay -> outcome (typed,
@@ -50,8 +50,13 @@ pub const REPLAY_TIMEOUT_S: u64 = 3600;
 /// Step-1 tolerance: only the order of force summation differs.
 pub const STEP1_RTOL: f64 = 1e-12;
 
-/// Later steps agree if their error is within this factor of the chaos envelope.
-pub const CHAOS_FACTOR: f64 = 100.0;
+/// Later steps agree if their error is within this factor of the chaos envelope. Measured
+/// with the twin of every particle one ulp apart (2026-12-03, ci, seed 1, every later step
+/// of every window): the codes' error is at most 2.25x the twin's in the 14 cases of
+/// `tests/replay.rs` and the stable cases of the quick night, 5.8x at the quick night's
+/// unstable (mu_r, eta_r) = (1, 0.5); 20 leaves 3.5x above that. (It was 100 with one
+/// particle nudged, whose envelope grew from one place only.)
+pub const CHAOS_FACTOR: f64 = 20.0;
 
 /// One replay: the case (preset and overrides already applied and validated), the window
 /// starts, the window length and where to write.
@@ -300,8 +305,16 @@ fn replay_window<'a>(
     // the plates as LIGGGHTS moved them, for the kernel check on LIGGGHTS' own states
     let mut lig_plates = plates.clone();
     let mut prev_state = d0.state.clone();
+    // the chaos twin: every particle one ulp apart in x, a seed of the same kind as the
+    // codes' difference (round-off in every particle's force sum). With one particle
+    // nudged, the envelope measured how fast round-off spreads from that particle only:
+    // window 7500 of (epsd, 0.5, 0.5, e = 1), ci, seed 1, had the codes 9.6e-12 apart at
+    // step 12 around a sliding periodic cluster (atoms 205, 174, 184) that the nudged
+    // particle's 3.0e-14 had not reached, though step 1 agreed to 9.3e-15.
     let mut twin = sim.clone();
-    twin.x[0][0] = next_up(twin.x[0][0]);
+    for x in &mut twin.x {
+        x[0] = next_up(x[0]);
+    }
     let mut cov = Coverage::default();
     let builds0 = sim.neighbor_builds();
     let mut steps = Vec::new();

@@ -20,7 +20,7 @@ pub struct StepResult {
     pub step: u64,
     /// Largest error over all channels, LIGGGHTS against native.
     pub max_rel_err: f64,
-    /// The same for native against native with one particle one ulp apart.
+    /// The same for native against native with every particle one ulp apart in x.
     pub chaos_rel_err: f64,
     pub worst: ChannelError,
     pub channels: Vec<ChannelError>,
