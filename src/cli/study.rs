@@ -215,17 +215,18 @@ pub fn study_args(path: &Path, overrides: &[String]) -> Result<Vec<String>> {
 }
 
 /// Particle-steps per second per core measured by `verify bench` on the reference machine
-/// (2026-12-02, AMD EPYC with AVX-512, fast state, 2,500 particles, medians of 4
-/// invocations): native with AVX-512 6.3e6, scalar 2.92e6, LIGGGHTS 2.37e6; the AVX2 path
-/// 5.4e6 (0.85x the AVX-512 path in the same invocation, 5.09e6 against 5.97e6). A plan's
+/// (AMD EPYC with AVX-512, fast state, 2,500 particles): LIGGGHTS 2.37e6 (median of 4
+/// invocations, 2026-12-02), each native path at its ratio to LIGGGHTS measured in one
+/// invocation on 2026-12-03 (`reference/bench/20261203-epyc/`: AVX-512 2.88x, AVX2 2.33x,
+/// scalar 1.24x; the machine's speed drifts by up to 30 %, its ratios much less). A plan's
 /// core-hours are these rates applied to its steps.
 fn rate(code: Engine) -> f64 {
     match code {
         Engine::Liggghts => 2.37e6,
         _ => match KernelPath::detect() {
-            KernelPath::Avx512 => 6.3e6,
-            KernelPath::Avx2 => 5.4e6,
-            KernelPath::Scalar => 2.92e6,
+            KernelPath::Avx512 => 6.8e6,
+            KernelPath::Avx2 => 5.5e6,
+            KernelPath::Scalar => 2.95e6,
         },
     }
 }
