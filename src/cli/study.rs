@@ -412,6 +412,8 @@ pub fn run_study(mut a: RunArgs) -> Result<Verdict> {
 pub fn execute(matches: &ArgMatches) -> Result<Verdict> {
     let cli = Cli::from_arg_matches(matches)
         .map_err(|e| Error::invalid("command line", "", e.to_string()))?;
+    // a bad DEM_VERIFY_MAX_KERNEL is refused here, before any solver reads it
+    KernelPath::max_from_env()?;
     let study = resolve(matches);
     let verdict = super::run(cli);
     if let (Some(study), Some(summary)) = (study, crate::run::summary_written()) {

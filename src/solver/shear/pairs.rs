@@ -36,15 +36,12 @@ pub enum KernelPath {
 }
 
 impl KernelPath {
-    /// The fastest path this CPU runs.
+    /// The fastest path this CPU runs (and [`MAX_KERNEL_VAR`] allows).
     pub fn detect() -> Self {
-        if avx512_available() {
-            KernelPath::Avx512
-        } else if avx2_available() {
-            KernelPath::Avx2
-        } else {
-            KernelPath::Scalar
-        }
+        [KernelPath::Avx512, KernelPath::Avx2]
+            .into_iter()
+            .find(|k| k.runs_here())
+            .unwrap_or(KernelPath::Scalar)
     }
 
     /// Every path this CPU runs, the scalar one first.
@@ -55,12 +52,40 @@ impl KernelPath {
             .collect()
     }
 
-    /// This CPU has the path's instructions.
+    /// This CPU has the path's instructions, and [`MAX_KERNEL_VAR`] does not exclude it.
     pub fn runs_here(self) -> bool {
-        match self {
+        let cpu = match self {
             KernelPath::Scalar => true,
             KernelPath::Avx512 => avx512_available(),
             KernelPath::Avx2 => avx2_available(),
+        };
+        cpu && self.rank() <= max_kernel().rank()
+    }
+
+    /// Scalar < AVX2 < AVX-512.
+    fn rank(self) -> u8 {
+        match self {
+            KernelPath::Scalar => 0,
+            KernelPath::Avx2 => 1,
+            KernelPath::Avx512 => 2,
+        }
+    }
+
+    /// The fastest path [`MAX_KERNEL_VAR`] allows: Ok(None) when it is unset; an error
+    /// naming the variable and its values for anything else than a path's name.
+    pub fn max_from_env() -> Result<Option<Self>> {
+        match std::env::var(MAX_KERNEL_VAR) {
+            Err(std::env::VarError::NotPresent) => Ok(None),
+            Ok(v) => [KernelPath::Scalar, KernelPath::Avx2, KernelPath::Avx512]
+                .into_iter()
+                .find(|k| k.name() == v)
+                .map(Some)
+                .ok_or_else(|| Error::invalid(MAX_KERNEL_VAR, v, "one of scalar, avx2, avx512")),
+            Err(e) => Err(Error::invalid(
+                MAX_KERNEL_VAR,
+                "(not unicode)",
+                format!("one of scalar, avx2, avx512 ({e})"),
+            )),
         }
     }
 
@@ -84,6 +109,21 @@ impl KernelPath {
             KernelPath::Avx2 => "avx2",
         }
     }
+}
+
+/// The environment variable that makes the solver act as a CPU without the faster paths
+/// (`scalar`: neither AVX2 nor AVX-512; `avx2`: no AVX-512; `avx512` or unset: what the CPU
+/// has), so that a machine with AVX-512 runs the whole test suite as one without it would.
+pub const MAX_KERNEL_VAR: &str = "DEM_VERIFY_MAX_KERNEL";
+
+/// The fastest path allowed in this process (read once; `verify` checks the variable at
+/// start and refuses a bad value before any solver runs).
+fn max_kernel() -> KernelPath {
+    static MAX: std::sync::OnceLock<KernelPath> = std::sync::OnceLock::new();
+    *MAX.get_or_init(|| match KernelPath::max_from_env() {
+        Ok(k) => k.unwrap_or(KernelPath::Avx512),
+        Err(e) => panic!("{e}"),
+    })
 }
 
 fn avx2_available() -> bool {
