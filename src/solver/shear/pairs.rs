@@ -183,8 +183,9 @@ fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &Fo
 /// ([`Sums::Blocks`]). Every sum is the same sequence of additions as the serial one: the same
 /// bits for any thread count. Particles are numbered by height (`loose_packing`) and the
 /// list is ordered by the lower index, so most particles' partners lie in their own block:
-/// measured on the fast state with 2 threads, 94 % of the particles (with the generation
-/// order, about half). `out` is also written whole when `record` (observers); a serial pass
+/// measured on the fast state with 2 threads, 94 % of the particles (with the placement
+/// order, random in space, only particles numbered below the cut could be, not measured).
+/// `out` is also written whole when `record` (observers); a serial pass
 /// otherwise neither allocates nor writes it.
 ///
 /// Pair order is the order of the per-particle (CSR) sums this pass replaced, so the results
