@@ -159,15 +159,12 @@ pub(super) struct Particles<'a> {
     pub mass: &'a [f64],
 }
 
-/// Adds one pair's increments to its particles' sums (i first, then j).
+/// Adds one increment to a particle's sum.
 #[inline(always)]
-fn accumulate(acc: &mut [ForceData], i: usize, j: usize, fi: &ForceData, fj: &ForceData) {
-    for (q, d) in [(i, fi), (j, fj)] {
-        let a = &mut acc[q];
-        for c in 0..3 {
-            a.delta_f[c] += d.delta_f[c];
-            a.delta_torque[c] += d.delta_torque[c];
-        }
+fn add_force(a: &mut ForceData, d: &ForceData) {
+    for c in 0..3 {
+        a.delta_f[c] += d.delta_f[c];
+        a.delta_torque[c] += d.delta_torque[c];
     }
 }
 
@@ -311,7 +308,13 @@ impl Sink<'_> {
         record: bool,
     ) {
         match self {
-            Sink::Acc(acc) => accumulate(acc, i, j, di, dj),
+            Sink::Acc(acc) => {
+                add_force(&mut acc[i], di);
+                add_force(&mut acc[j], dj);
+                if let (Some(o), true) = (out, record) {
+                    *o = (*di, *dj);
+                }
+            }
             Sink::Block { acc, own } => {
                 for (q, d) in [(i, di), (j, dj)] {
                     if own[q] {
@@ -320,10 +323,9 @@ impl Sink<'_> {
                         unsafe { acc.add(q, d) }
                     }
                 }
-                if let Some(o) = out {
-                    if record {
-                        *o = (*di, *dj);
-                    } else {
+                match out {
+                    Some(o) if record => *o = (*di, *dj),
+                    Some(o) => {
                         if !own[i] {
                             o.0 = *di;
                         }
@@ -331,12 +333,9 @@ impl Sink<'_> {
                             o.1 = *dj;
                         }
                     }
+                    None => {}
                 }
-                return;
             }
-        }
-        if let (Some(o), true) = (out, record) {
-            *o = (*di, *dj);
         }
     }
 }
@@ -370,11 +369,7 @@ impl<'a> SharedAcc<'a> {
     #[inline(always)]
     unsafe fn add(&self, q: usize, d: &ForceData) {
         assert!(q < self.len);
-        let a = &mut *self.ptr.add(q);
-        for c in 0..3 {
-            a.delta_f[c] += d.delta_f[c];
-            a.delta_torque[c] += d.delta_torque[c];
-        }
+        add_force(&mut *self.ptr.add(q), d);
     }
 }
 
