@@ -8,6 +8,7 @@ use dem_verify::solver::material::{sphere_mass, PairParams};
 use dem_verify::solver::shear::neighbor::{NeighborList, Periodic};
 use dem_verify::solver::shear::plate::{plate_triangles, Plate, Side};
 use dem_verify::solver::shear::{compact, KernelPath, ShearSim};
+use dem_verify::solver::team::Team;
 use dem_verify::solver::trimesh::TriMesh;
 use dem_verify::spec::shear::ShearCase;
 use dem_verify::spec::RollingModel;
@@ -76,8 +77,9 @@ fn neighbor(c: &mut Criterion) {
         lx: case.box_x,
         lz: case.box_z,
     };
+    let team = Team::new(1);
     c.bench_function("neighbor build 2500", |bch| {
-        bch.iter(|| nl.build(black_box(&pk.position), &pk.radius, case.skin, b))
+        bch.iter(|| nl.build(&team, black_box(&pk.position), &pk.radius, case.skin, b))
     });
 }
 

@@ -26,6 +26,7 @@ pub use pairs::KernelPath;
 use super::contact::{moved_beyond_half_skin, ContactData, ForceData};
 use super::integrate::{Kick, NveSphere};
 use super::material::{sphere_mass, PairParams};
+use super::team::{bounds, split_mut, Team};
 use super::trimesh::{TriContactRecord, TriMesh};
 use super::vec3::V3;
 use crate::error::{Error, Result};
@@ -34,8 +35,8 @@ use crate::spec::shear::ShearCase;
 use implicit::add_dashpot;
 use neighbor::{NeighborList, Periodic};
 use plate::{plate_triangles, Plate, Side};
-use rayon::prelude::*;
 use servo::Servo;
+use std::sync::Arc;
 
 /// Most mesh contact records one sphere may hold at once.
 const MAX_WALL_CONTACTS: usize = 8;
@@ -79,12 +80,6 @@ impl From<WallSlots> for FixedSlots {
 }
 
 /// The 9 periodic image shifts (x, z) of a triangle; index 4 is the triangle itself.
-/// Smallest piece of a parallel loop over particles with little work per item (integration,
-/// the rebuild check): below this, rayon's task overhead outweighs the work.
-const LIGHT_CHUNK: usize = 1024;
-/// Smallest piece of the force loops (pairs, per-particle sums and plate contacts).
-const HEAVY_CHUNK: usize = 256;
-
 fn image_shift(k: u8, lx: f64, lz: f64) -> V3 {
     let (ix, iz) = ((k / 3) as f64 - 1.0, (k % 3) as f64 - 1.0);
     [ix * lx, 0.0, iz * lz]
@@ -202,6 +197,10 @@ pub struct ShearSim {
     /// Wall time per phase of `step` (off unless [`ShearSim::time_phases`]).
     #[serde(skip)]
     phases: Option<PhaseClock>,
+    /// The threads of the per-step parallel regions, as many as the rayon pool the
+    /// simulation steps in ([`ShearSim::team`]).
+    #[serde(skip)]
+    team: Option<Arc<Team>>,
 }
 
 /// Wall time spent in each phase of [`ShearSim::step`] [s], summed over `steps` steps.
@@ -328,6 +327,7 @@ impl ShearSim {
             bottom_force: [0.0; 3],
             kernel: KernelPath::detect(),
             phases: None,
+            team: None,
         }
     }
 
@@ -402,27 +402,34 @@ impl ShearSim {
         }
         let nve = self.nve;
         let dt = self.nve.dtv;
-        let kick = &self.kick;
+        let team = self.team();
+        let th = team.threads();
+        let n = self.x.len();
+        let (kick, f, torque) = (&self.kick, &self.f, &self.torque);
         let (xhold, skin) = (&self.xhold, self.case.skin);
         // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
         // (some atom moved more than skin/2 since the last build)
-        let moved = self
-            .x
-            .par_iter_mut()
-            .zip(self.v.par_iter_mut())
-            .zip(self.omega.par_iter_mut())
-            .zip(self.f.par_iter().zip(self.torque.par_iter()))
-            .zip(self.rotation.par_iter_mut())
-            .with_min_len(LIGHT_CHUNK)
-            .enumerate()
-            .map(|(i, ((((x, v), w), (f, t)), rot))| {
-                nve.initial_kicked(x, v, w, *f, *t, kick[i]);
-                for k in 0..3 {
-                    rot[k] += w[k] * dt;
+        let parts: Vec<_> = split_mut(&mut self.x, th)
+            .into_iter()
+            .zip(split_mut(&mut self.v, th))
+            .zip(split_mut(&mut self.omega, th))
+            .zip(split_mut(&mut self.rotation, th))
+            .collect();
+        let moved = team
+            .map(parts, |t, (((x, v), w), rot)| {
+                let o = bounds(n, th, t).start;
+                let mut moved = false;
+                for k in 0..x.len() {
+                    let i = o + k;
+                    nve.initial_kicked(&mut x[k], &mut v[k], &mut w[k], f[i], torque[i], kick[i]);
+                    for c in 0..3 {
+                        rot[k][c] += w[k][c] * dt;
+                    }
+                    moved |= moved_beyond_half_skin(x[k], xhold[i], skin);
                 }
-                moved_beyond_half_skin(*x, xhold[i], skin)
+                moved
             })
-            .reduce(|| false, |a, b| a | b);
+            .contains(&true);
         self.lap(|p| &mut p.integrate);
         self.move_plates();
         self.lap(|p| &mut p.plates);
@@ -439,14 +446,18 @@ impl ShearSim {
             v.clone_from(&self.v);
             w.clone_from(&self.omega);
         }
-        let kick = &self.kick;
-        self.v
-            .par_iter_mut()
-            .zip(self.omega.par_iter_mut())
-            .zip(self.f.par_iter().zip(self.torque.par_iter()))
-            .zip(kick.par_iter())
-            .with_min_len(LIGHT_CHUNK)
-            .for_each(|(((v, w), (f, t)), k)| nve.finish_kicked(v, w, *f, *t, *k));
+        let (kick, f, torque) = (&self.kick, &self.f, &self.torque);
+        let parts: Vec<_> = split_mut(&mut self.v, th)
+            .into_iter()
+            .zip(split_mut(&mut self.omega, th))
+            .collect();
+        team.each(parts, |t, (v, w)| {
+            let o = bounds(n, th, t).start;
+            for k in 0..v.len() {
+                let i = o + k;
+                nve.finish_kicked(&mut v[k], &mut w[k], f[i], torque[i], kick[i]);
+            }
+        });
         if self.implicit {
             self.implicit_rotation();
         }
@@ -454,6 +465,16 @@ impl ShearSim {
         self.servo.final_integrate(self.top_force, self.nve.dtv);
         self.lap(|p| &mut p.plates);
         Ok(())
+    }
+
+    /// The team of the per-step regions: as many threads as the rayon pool this is called
+    /// in (made again when that changes, e.g. a checkpoint resumed with another count).
+    pub(super) fn team(&mut self) -> Arc<Team> {
+        let n = rayon::current_num_threads();
+        match &self.team {
+            Some(t) if t.threads() == n => Arc::clone(t),
+            _ => Arc::clone(self.team.insert(Arc::new(Team::new(n)))),
+        }
     }
 
     /// The plates' initial_integrate: the servo moves the top plate, `move/mesh linear` the
@@ -473,10 +494,12 @@ impl ShearSim {
     }
 
     fn compute_forces(&mut self, update_history: bool) -> Result<()> {
+        let team = self.team();
         let params = &self.params;
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
         // pair forces: each pair writes its own history, force slot and state
         let sums = pairs::pass(
+            &team,
             self.kernel,
             &self.nl.pairs,
             pairs::Csr {
@@ -595,25 +618,29 @@ impl ShearSim {
                 failed.store(true, std::sync::atomic::Ordering::Relaxed);
             }
         };
-        let each = self
-            .f
-            .par_iter_mut()
-            .zip(self.torque.par_iter_mut())
-            .zip(self.wall.par_iter_mut())
-            .zip(self.wall_force.par_iter_mut());
-        if implicit {
-            each.zip(self.imp.par_iter_mut())
-                .with_min_len(HEAVY_CHUNK)
-                .enumerate()
-                .for_each(|(q, ((((f, t), slots), wf), imp))| body(q, f, t, slots, wf, imp));
+        let th = team.threads();
+        let n = self.f.len();
+        let imps = if implicit {
+            split_mut(&mut self.imp, th)
         } else {
             // the dashpot sums are held by epsd_implicit only (72 bytes per particle)
-            each.with_min_len(HEAVY_CHUNK)
-                .enumerate()
-                .for_each(|(q, (((f, t), slots), wf))| {
-                    body(q, f, t, slots, wf, &mut ([0.0; 6], [0.0; 3]))
-                });
-        }
+            (0..th).map(|_| Default::default()).collect()
+        };
+        let parts: Vec<_> = split_mut(&mut self.f, th)
+            .into_iter()
+            .zip(split_mut(&mut self.torque, th))
+            .zip(split_mut(&mut self.wall, th))
+            .zip(split_mut(&mut self.wall_force, th))
+            .zip(imps)
+            .collect();
+        team.each(parts, |t, ((((f, tq), slots), wf), imp)| {
+            let o = bounds(n, th, t).start;
+            let mut none = ([0.0; 6], [0.0; 3]);
+            for k in 0..f.len() {
+                let imp = imp.get_mut(k).unwrap_or(&mut none);
+                body(o + k, &mut f[k], &mut tq[k], &mut slots[k], &mut wf[k], imp);
+            }
+        });
         if failed.into_inner() {
             return Err(too_many_wall_contacts(self.step));
         }

@@ -12,6 +12,7 @@
 //! LAMMPS sees a ghost atom: at `x_j + shift` with `shift` a multiple of the box length.
 
 use crate::solver::contact::ContactHistory;
+use crate::solver::team::{bounds, Team};
 
 /// One listed pair: `i < j`, except across a periodic seam, where `i` is the higher index and
 /// `j` the lower one seen at its image. LIGGGHTS (newton off) keeps two copies of such a
@@ -69,7 +70,14 @@ pub struct Periodic {
 
 impl NeighborList {
     /// Rebuilds the list for positions `x` (already wrapped into [0, lx) x [0, lz)).
-    pub fn build(&mut self, x: &[[f64; 3]], radius: &[f64], skin: f64, box_: Periodic) {
+    pub fn build(
+        &mut self,
+        team: &Team,
+        x: &[[f64; 3]],
+        radius: &[f64],
+        skin: f64,
+        box_: Periodic,
+    ) {
         let n = x.len();
         let rmax = radius.iter().cloned().fold(0.0, f64::max);
         let cut = 2.0 * rmax + skin;
@@ -110,8 +118,7 @@ impl NeighborList {
         drop((cell_of, fill));
         // about the last list's length: the list changes little between builds (a capacity
         // of 8 per particle held 256 bytes per particle for 140 used)
-        let mut new_pairs: Vec<Pair> =
-            Vec::with_capacity(self.pairs.len() + spare(self.pairs.len()));
+        let new_pairs: Vec<Pair> = Vec::with_capacity(self.pairs.len() + spare(self.pairs.len()));
         // The histories to carry over, and nothing else: those of the listed pairs whose
         // history has a bit set (a touching pair with an all-zero history gets the same bits
         // as a new one), in list order, with their pair's (i, j); the histories compacted in
@@ -135,80 +142,96 @@ impl NeighborList {
         carried_hist.shrink_to_fit();
         self.pairs = Vec::new();
         self.entries = Vec::new();
-        let mut touching: Vec<bool> = Vec::with_capacity(new_pairs.capacity());
-        let mut cand: Vec<(u32, [f64; 3], bool)> = Vec::new();
-        for i in 0..n {
-            let (ix, iy, iz) = (cx(x[i][0]), cy(x[i][1]), cz(x[i][2]));
-            cand.clear();
-            let xs: &[isize] = if nx >= 3 {
-                &[-1, 0, 1]
-            } else if nx == 2 {
-                &[0, 1]
-            } else {
-                &[0]
-            };
-            let zs: &[isize] = if nz >= 3 {
-                &[-1, 0, 1]
-            } else if nz == 2 {
-                &[0, 1]
-            } else {
-                &[0]
-            };
-            for &dx in xs {
-                for dy in [-1isize, 0, 1] {
-                    let gy = iy as isize + dy;
-                    if gy < 0 || gy >= ny as isize {
-                        continue;
-                    }
-                    for &dz in zs {
-                        let gx = (ix as isize + dx).rem_euclid(nx as isize) as usize;
-                        let gz = (iz as isize + dz).rem_euclid(nz as isize) as usize;
-                        let c = (gx * ny + gy as usize) * nz + gz;
-                        for &j in &members[head[c] as usize..head[c + 1] as usize] {
-                            if (j as usize) <= i {
-                                continue;
-                            }
-                            let jj = j as usize;
-                            let mut shift = [0.0; 3];
-                            let mut d =
-                                [x[i][0] - x[jj][0], x[i][1] - x[jj][1], x[i][2] - x[jj][2]];
-                            if d[0] > 0.5 * box_.lx {
-                                shift[0] = box_.lx;
-                            } else if d[0] < -0.5 * box_.lx {
-                                shift[0] = -box_.lx;
-                            }
-                            if d[2] > 0.5 * box_.lz {
-                                shift[2] = box_.lz;
-                            } else if d[2] < -0.5 * box_.lz {
-                                shift[2] = -box_.lz;
-                            }
-                            d[0] = x[i][0] - (x[jj][0] + shift[0]);
-                            d[2] = x[i][2] - (x[jj][2] + shift[2]);
-                            let radsum = radius[i] + radius[jj];
-                            let rc = radsum + skin;
-                            let rsq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-                            if rsq <= rc * rc {
-                                cand.push((j, shift, rsq < radsum * radsum));
+        // the search, each thread over its share of the particles in order ([`bounds`]);
+        // the shares' lists joined in thread order are the serial list (the first share
+        // fills the list itself: a copy of the whole list would raise the peak)
+        let th = team.threads();
+        let cap = new_pairs.capacity();
+        let mut first = Some(new_pairs);
+        let mut shares = team.map((0..th).map(|_| first.take()).collect(), |t, list| {
+            let range = bounds(n, th, t);
+            let mut new_pairs = list.unwrap_or_else(|| Vec::with_capacity(cap * range.len() / n));
+            let mut touching: Vec<bool> = Vec::with_capacity(new_pairs.capacity());
+            let mut cand: Vec<(u32, [f64; 3], bool)> = Vec::new();
+            for i in range {
+                let (ix, iy, iz) = (cx(x[i][0]), cy(x[i][1]), cz(x[i][2]));
+                cand.clear();
+                let xs: &[isize] = if nx >= 3 {
+                    &[-1, 0, 1]
+                } else if nx == 2 {
+                    &[0, 1]
+                } else {
+                    &[0]
+                };
+                let zs: &[isize] = if nz >= 3 {
+                    &[-1, 0, 1]
+                } else if nz == 2 {
+                    &[0, 1]
+                } else {
+                    &[0]
+                };
+                for &dx in xs {
+                    for dy in [-1isize, 0, 1] {
+                        let gy = iy as isize + dy;
+                        if gy < 0 || gy >= ny as isize {
+                            continue;
+                        }
+                        for &dz in zs {
+                            let gx = (ix as isize + dx).rem_euclid(nx as isize) as usize;
+                            let gz = (iz as isize + dz).rem_euclid(nz as isize) as usize;
+                            let c = (gx * ny + gy as usize) * nz + gz;
+                            for &j in &members[head[c] as usize..head[c + 1] as usize] {
+                                if (j as usize) <= i {
+                                    continue;
+                                }
+                                let jj = j as usize;
+                                let mut shift = [0.0; 3];
+                                let mut d =
+                                    [x[i][0] - x[jj][0], x[i][1] - x[jj][1], x[i][2] - x[jj][2]];
+                                if d[0] > 0.5 * box_.lx {
+                                    shift[0] = box_.lx;
+                                } else if d[0] < -0.5 * box_.lx {
+                                    shift[0] = -box_.lx;
+                                }
+                                if d[2] > 0.5 * box_.lz {
+                                    shift[2] = box_.lz;
+                                } else if d[2] < -0.5 * box_.lz {
+                                    shift[2] = -box_.lz;
+                                }
+                                d[0] = x[i][0] - (x[jj][0] + shift[0]);
+                                d[2] = x[i][2] - (x[jj][2] + shift[2]);
+                                let radsum = radius[i] + radius[jj];
+                                let rc = radsum + skin;
+                                let rsq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+                                if rsq <= rc * rc {
+                                    cand.push((j, shift, rsq < radsum * radsum));
+                                }
                             }
                         }
                     }
                 }
+                cand.sort_by_key(|c| c.0);
+                cand.dedup_by_key(|c| c.0);
+                for &(j, shift, touch) in &cand {
+                    touching.push(touch);
+                    let (a, b, s) = if shift == [0.0; 3] {
+                        (i as u32, j, shift)
+                    } else {
+                        (j, i as u32, [-shift[0], -shift[1], -shift[2]])
+                    };
+                    new_pairs.push(Pair {
+                        i: a,
+                        j: b,
+                        shift: s,
+                    });
+                }
             }
-            cand.sort_by_key(|c| c.0);
-            cand.dedup_by_key(|c| c.0);
-            for &(j, shift, touch) in &cand {
-                touching.push(touch);
-                let (a, b, s) = if shift == [0.0; 3] {
-                    (i as u32, j, shift)
-                } else {
-                    (j, i as u32, [-shift[0], -shift[1], -shift[2]])
-                };
-                new_pairs.push(Pair {
-                    i: a,
-                    j: b,
-                    shift: s,
-                });
-            }
+            (new_pairs, touching)
+        });
+        let (mut new_pairs, mut touching) = shares.remove(0);
+        for (p, t) in shares {
+            new_pairs.extend_from_slice(&p);
+            touching.extend_from_slice(&t);
         }
         // carry histories of touching pairs over: both lists are sorted by (lower, higher)
         let mut new_hist = vec![ContactHistory::default(); new_pairs.len()];
@@ -322,7 +345,15 @@ mod tests {
             let skin = skin_frac * rmax;
             let b = Periodic { lx, lz };
             let mut nl = NeighborList::default();
-            nl.build(&x, &r, skin, b);
+            nl.build(&Team::new(1), &x, &r, skin, b);
+            // the same list, in the same order, from a team of three
+            let mut nl3 = NeighborList::default();
+            nl3.build(&Team::new(3), &x, &r, skin, b);
+            prop_assert!(
+                nl3.pairs.iter().map(|p| (p.i, p.j, p.shift)).eq(nl.pairs.iter().map(|p| (p.i, p.j, p.shift))),
+                "3 threads list other pairs"
+            );
+            prop_assert_eq!(&nl3.start, &nl.start);
             let mut found: Vec<(u32, u32)> =
                 nl.pairs.iter().map(|p| (p.i.min(p.j), p.i.max(p.j))).collect();
             found.sort();
@@ -371,37 +402,37 @@ mod tests {
         let r = vec![0.06; 4];
         let mut nl = NeighborList::default();
         let b = Periodic { lx: 1.0, lz: 1.0 };
-        nl.build(&x, &r, 0.01, b);
+        nl.build(&Team::new(1), &x, &r, 0.01, b);
         assert_eq!(nl.pairs.len(), 1, "{:?}", nl.pairs);
         // across the seam the pair is oriented from the higher index (LIGGGHTS' reported copy)
         assert_eq!((nl.pairs[0].i, nl.pairs[0].j), (1, 0));
         assert_eq!(nl.pairs[0].shift, [1.0, 0.0, 0.0]);
         nl.hist[0].shear = [1.0, 2.0, 3.0];
-        nl.build(&x, &r, 0.01, b);
+        nl.build(&Team::new(1), &x, &r, 0.01, b);
         assert_eq!(nl.hist[0].shear, [1.0, 2.0, 3.0]);
         // particle 0 wrapped to the other side of the seam: the pair no longer crosses it,
         // turns round to (0, 1), and its relative history changes sign
         let mut wrapped = x.clone();
         wrapped[0][0] = 1.05 - 1e-3;
-        nl.build(&wrapped, &r, 0.01, b);
+        nl.build(&Team::new(1), &wrapped, &r, 0.01, b);
         assert_eq!(
             (nl.pairs[0].i, nl.pairs[0].j, nl.pairs[0].shift),
             (0, 1, [0.0; 3])
         );
         assert_eq!(nl.hist[0].shear, [-1.0, -2.0, -3.0]);
-        nl.build(&x, &r, 0.01, b);
+        nl.build(&Team::new(1), &x, &r, 0.01, b);
         assert_eq!(nl.hist[0].shear, [1.0, 2.0, 3.0]);
         // listed but not touching at the rebuild: history starts again from zero
         let mut apart = x.clone();
         apart[1] = [0.925, 0.5, 0.5];
-        nl.build(&apart, &r, 0.01, b);
+        nl.build(&Team::new(1), &apart, &r, 0.01, b);
         assert_eq!(nl.pairs.len(), 1);
         assert_eq!(nl.hist[0].shear, [0.0; 3]);
         // the CSR lists each pair for both particles
         assert_eq!(nl.start, vec![0, 1, 2, 2, 2]);
         let mut far = x.clone();
         far[1] = [0.7, 0.5, 0.5];
-        nl.build(&far, &r, 0.01, b);
+        nl.build(&Team::new(1), &far, &r, 0.01, b);
         assert!(nl.pairs.is_empty());
     }
 
@@ -414,7 +445,7 @@ mod tests {
             .collect();
         let r: Vec<f64> = (0..n).map(|_| 0.02 + 0.02 * rng.uniform()).collect();
         let mut nl = NeighborList::default();
-        nl.build(&x, &r, 0.005, Periodic { lx: 1.0, lz: 0.8 });
+        nl.build(&Team::new(1), &x, &r, 0.005, Periodic { lx: 1.0, lz: 0.8 });
         let mut brute = 0;
         for i in 0..n {
             for j in i + 1..n {

@@ -49,8 +49,9 @@ impl ShearSim {
                 x[2] -= lz;
             }
         }
+        let team = self.team();
         self.nl
-            .build(&self.x, &self.radius, self.case.skin, self.box_);
+            .build(&team, &self.x, &self.radius, self.case.skin, self.box_);
         self.rebuild_plates();
         self.build_wall_candidates();
         self.xhold.clone_from(&self.x);

@@ -179,8 +179,9 @@ impl ShearSim {
         self.xhold.clone_from(&st.x);
         self.nl.pairs.clear();
         let builds = self.nl.builds;
+        let team = self.team();
         self.nl
-            .build(&self.x, &self.radius, self.case.skin, self.box_);
+            .build(&team, &self.x, &self.radius, self.case.skin, self.box_);
         self.nl.builds = builds;
         let mut used = 0usize;
         for (p, ph) in self.nl.pairs.iter().zip(self.nl.hist.iter_mut()) {
