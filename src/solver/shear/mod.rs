@@ -36,7 +36,7 @@ use implicit::add_dashpot;
 use neighbor::{NeighborList, Periodic};
 use plate::{plate_triangles, Plate, Side};
 use servo::Servo;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Most mesh contact records one sphere may hold at once.
 const MAX_WALL_CONTACTS: usize = 8;
@@ -201,6 +201,9 @@ pub struct ShearSim {
     /// simulation steps in ([`ShearSim::team`]).
     #[serde(skip)]
     team: Option<Arc<Team>>,
+    /// The parallel pair pass's per-list plan.
+    #[serde(skip)]
+    plan: pairs::BlockPlan,
 }
 
 /// Wall time spent in each phase of [`ShearSim::step`] [s], summed over `steps` steps.
@@ -328,6 +331,7 @@ impl ShearSim {
             kernel: KernelPath::detect(),
             phases: None,
             team: None,
+            plan: Default::default(),
         }
     }
 
@@ -495,8 +499,65 @@ impl ShearSim {
 
     fn compute_forces(&mut self, update_history: bool) -> Result<()> {
         let team = self.team();
+        let th = team.threads();
+        let n = self.x.len();
         let params = &self.params;
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
+        let implicit = self.implicit;
+        let torsion = params.torsion_torque;
+        let walls = walls::WallContext {
+            params,
+            meshes: &self.meshes,
+            cand: &self.wall_cand,
+            cstart: &self.wall_start,
+            lx: self.box_.lx,
+            lz: self.box_.lz,
+            // node velocities: move/mesh linear (bottom), servo vcm (top)
+            vnode: [[self.bottom_node_v, 0.0, 0.0], self.servo.vcm],
+            x,
+            v,
+            omega,
+            radius,
+            mass,
+            implicit,
+            torsion,
+            update_history,
+            trace: log::log_enabled!(log::Level::Trace),
+        };
+        // On several threads without dashpot sums, each thread evaluates the plate contacts
+        // of its share of the particles in the pair pass's region, after its block of pairs
+        // (a contact's force does not depend on the pair sums; it is added to them, in the
+        // same order, in the sums region): the pair blocks and the plate contacts are
+        // uneven in opposite directions (more pairs in the lower share, 22 % more plate
+        // candidates in the upper one on the fast state), and each region waits for its
+        // slower thread.
+        let fuse = th > 1 && !implicit;
+        type Early<'a> = (&'a mut [WallSlots], Vec<walls::WallHit>, bool);
+        let early: Vec<Mutex<Early>> = if fuse {
+            split_mut(&mut self.wall, th)
+                .into_iter()
+                .map(|slots| Mutex::new((slots, Vec::new(), true)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let after_block = |t: usize| {
+            let Some(part) = early.get(t) else {
+                return;
+            };
+            let mut part = part.lock().unwrap_or_else(|e| e.into_inner());
+            let (slots, hits, ok) = &mut *part;
+            let o = bounds(n, th, t).start;
+            let mut none = ([0.0; 6], [0.0; 3]);
+            for (k, slots) in slots.iter_mut().enumerate() {
+                let q = o + k;
+                if walls.cstart[q] != walls.cstart[q + 1]
+                    && !walls.evaluate(q, slots, &mut none, |h| hits.push(*h))
+                {
+                    *ok = false;
+                }
+            }
+        };
         // pair forces: each pair writes its own history, force slot and state
         let sums = pairs::pass(
             &team,
@@ -521,43 +582,34 @@ impl ShearSim {
             params,
             update_history,
             self.record_pair_forces,
+            &after_block,
+            &mut self.plan,
+            self.nl.generation,
         );
         lap(&mut self.phases, |p| &mut p.pairs);
+        let mut hits: Vec<Vec<walls::WallHit>> = Vec::with_capacity(early.len());
+        for part in early {
+            let (_, h, ok) = part.into_inner().unwrap_or_else(|e| e.into_inner());
+            if !ok {
+                return Err(too_many_wall_contacts(self.step));
+            }
+            hits.push(h);
+        }
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
-        let acc = &self.acc;
         let csr = pairs::Csr {
             start: &nl.start,
             entries: &nl.entries,
         };
         let pd = &self.pair_damp;
         let sum = pairs::PairSums {
-            sums: &sums,
+            own: match sums {
+                pairs::Sums::Accumulated => &[],
+                pairs::Sums::Blocks => &self.plan.own,
+            },
             csr,
-            acc,
             out: &self.pair_force,
             state: &self.pair_state,
-        };
-        let implicit = self.implicit;
-        let torsion = params.torsion_torque;
-        let walls = walls::WallContext {
-            params,
-            meshes: &self.meshes,
-            cand: &self.wall_cand,
-            cstart: &self.wall_start,
-            lx: self.box_.lx,
-            lz: self.box_.lz,
-            // node velocities: move/mesh linear (bottom), servo vcm (top)
-            vnode: [[self.bottom_node_v, 0.0, 0.0], self.servo.vcm],
-            x,
-            v,
-            omega,
-            radius,
-            mass,
-            implicit,
-            torsion,
-            update_history,
-            trace: log::log_enabled!(log::Level::Trace),
         };
         if sums == pairs::Sums::Accumulated && !implicit {
             // One thread without dashpot sums: the pair sums are the particles' forces
@@ -566,7 +618,7 @@ impl ShearSim {
             // their plate forces added in particle order as the loop below adds them (the
             // other particles add +0, which changes no bit). Measured on the fast state
             // (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per particle-step.
-            for ((f, t), a) in self.f.iter_mut().zip(self.torque.iter_mut()).zip(acc) {
+            for ((f, t), a) in self.f.iter_mut().zip(self.torque.iter_mut()).zip(&self.acc) {
                 *f = a.delta_f;
                 *t = a.delta_torque;
             }
@@ -594,7 +646,9 @@ impl ShearSim {
                     t: &mut V3,
                     slots: &mut WallSlots,
                     wf: &mut (V3, V3),
-                    imp: &mut ([f64; 6], V3)| {
+                    imp: &mut ([f64; 6], V3),
+                    acc: &mut ForceData,
+                    found: &[walls::WallHit]| {
             *f = [0.0; 3];
             *t = [0.0; 3];
             if implicit {
@@ -610,16 +664,23 @@ impl ShearSim {
                 }
             }
             // the pair sums (pairs::pass)
-            sum.add(q, f, t);
+            sum.add(q, acc, f, t);
             // a particle without plate candidates holds no records
             // (`drop_records_without_candidates`): nothing to mark, test or clean up, and
             // no plate force (its `wf` is not read)
-            if walls.cstart[q] != walls.cstart[q + 1] && !walls.particle(q, slots, f, t, wf, imp) {
+            if walls.cstart[q] == walls.cstart[q + 1] {
+                return;
+            }
+            if fuse {
+                // the contacts found after the pair block, added as `particle` adds them
+                *wf = ([0.0; 3], [0.0; 3]);
+                for hit in found {
+                    walls::apply(hit, f, t, wf);
+                }
+            } else if !walls.particle(q, slots, f, t, wf, imp) {
                 failed.store(true, std::sync::atomic::Ordering::Relaxed);
             }
         };
-        let th = team.threads();
-        let n = self.f.len();
         let imps = if implicit {
             split_mut(&mut self.imp, th)
         } else {
@@ -632,15 +693,35 @@ impl ShearSim {
             .zip(split_mut(&mut self.wall, th))
             .zip(split_mut(&mut self.wall_force, th))
             .zip(imps)
+            .zip(split_mut(&mut self.acc, th))
             .collect();
-        team.each(parts, |t, ((((f, tq), slots), wf), imp)| {
+        team.each(parts, |t, (((((f, tq), slots), wf), imp), acc)| {
             let o = bounds(n, th, t).start;
             let mut none = ([0.0; 6], [0.0; 3]);
+            // this share's early plate contacts, in particle order
+            let mine: &[walls::WallHit] = hits.get(t).map_or(&[], Vec::as_slice);
+            let mut h = 0;
             for k in 0..f.len() {
+                let q = o + k;
+                let first = h;
+                while h < mine.len() && mine[h].q as usize == q {
+                    h += 1;
+                }
                 let imp = imp.get_mut(k).unwrap_or(&mut none);
-                body(o + k, &mut f[k], &mut tq[k], &mut slots[k], &mut wf[k], imp);
+                body(
+                    q,
+                    &mut f[k],
+                    &mut tq[k],
+                    &mut slots[k],
+                    &mut wf[k],
+                    imp,
+                    &mut acc[k],
+                    &mine[first..h],
+                );
             }
         });
+        // every sum was read and zeroed (`PairSums::add`)
+        self.plan.acc_zero = sums == pairs::Sums::Blocks;
         if failed.into_inner() {
             return Err(too_many_wall_contacts(self.step));
         }

@@ -41,6 +41,10 @@ pub struct NeighborList {
     /// (pair index, p is the pair's i) in increasing pair index.
     pub entries: Vec<(u32, bool)>,
     pub builds: u64,
+    /// Builds of this list in this process (not restored from a checkpoint, unlike
+    /// `builds`): what per-list plans made from it are keyed by.
+    #[serde(skip)]
+    pub generation: u64,
 }
 
 /// Spare capacity kept beside `n` per-pair values: 1/8 and 64 more, enough for the list's
@@ -283,6 +287,7 @@ impl NeighborList {
         }
         self.start = count;
         self.builds += 1;
+        self.generation += 1;
     }
 }
 

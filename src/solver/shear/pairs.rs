@@ -14,7 +14,7 @@
 //! in parallel; every particle's sum is made in pair order whatever the thread count
 //! ([`pass`]), so the results do not depend on it.
 
-use super::neighbor::Pair;
+use super::neighbor::{resize_snug, Pair};
 use super::{pair_contact, PairContact, PairDamp, PairState};
 use crate::error::{Error, Result};
 use crate::solver::contact::{surfaces_intersect, ContactHistory, ForceData};
@@ -171,8 +171,9 @@ fn add_force(a: &mut ForceData, d: &ForceData) {
 /// Evaluates every listed pair: its state, (when `update_history`) its history and its force
 /// and torque increments (zero when apart), each particle's increments summed in pair order.
 /// With one thread they are added to the per-particle sums `acc` as the pairs are evaluated
-/// ([`Sums::Accumulated`]). With more, the pieces are grouped in one block of consecutive
-/// pieces per thread, evaluated in parallel block by block, each block's pieces in order: a
+/// ([`Sums::Accumulated`]). With more, the pairs are grouped in one block per member of the
+/// `team` (the pairs found from its share of the particles), evaluated in parallel block by
+/// block, each block's pieces in order: a
 /// particle whose pairs all lie in one block gets its increments added to `acc` there, in
 /// pair order, by that block alone; the others' increments are written to their side of the
 /// pair's `out` slot and summed afterwards by [`PairSums::add`] over the particle's pairs in
@@ -183,7 +184,8 @@ fn add_force(a: &mut ForceData, d: &ForceData) {
 /// measured on the fast state with 2 threads, 94 % of the particles (with the placement
 /// order, random in space, only particles numbered below the cut could be, not measured).
 /// `out` is also written whole when `record` (observers); a serial pass
-/// otherwise neither allocates nor writes it.
+/// otherwise neither allocates nor writes it. `after_block(t)` runs on member `t` after its
+/// block (on one thread, after the whole list), in the same region.
 ///
 /// Pair order is the order of the per-particle (CSR) sums this pass replaced, so the results
 /// are the bits of before (a whole ci run, native.csv identical to the previous binary's,
@@ -205,6 +207,9 @@ pub(super) fn pass(
     params: &PairParams,
     update_history: bool,
     record: bool,
+    after_block: &(dyn Fn(usize) + Sync),
+    plan: &mut BlockPlan,
+    generation: u64,
 ) -> Sums {
     let np = pairs.len();
     let n = s.x.len();
@@ -279,36 +284,45 @@ pub(super) fn pass(
                 update_history,
             );
         }
+        after_block(0);
         return Sums::Accumulated;
     }
-    // a particle whose pairs all lie in one block is summed there, in pair order
-    let block_of = |k: u32| cut[1..].partition_point(|&c| c <= k as usize);
-    // the sums zeroed and the owners found by every thread for its share of the particles
-    // (serial, these were 7 of the 2-thread pass's 71 ns per particle-step)
-    let mut own = vec![false; n];
-    let parts: Vec<_> = split_mut(acc, th)
-        .into_iter()
-        .zip(split_mut(&mut own, th))
-        .collect();
-    team.each(parts, |t, (acc, own)| {
-        acc.fill(ForceData::default());
-        let o = bounds(n, th, t).start;
-        for (k, own) in own.iter_mut().enumerate() {
-            let (a, b) = (csr.start[o + k] as usize, csr.start[o + k + 1] as usize);
-            *own = a == b || block_of(csr.entries[a].0) == block_of(csr.entries[b - 1].0);
-        }
-    });
+    // a particle whose pairs all lie in one block is summed there, in pair order; which
+    // particles those are depends only on the list and the team size, found once per
+    // list, by every thread for its share of the particles
+    let key = Some((generation, th));
+    let acc_zero = std::mem::take(&mut plan.acc_zero);
+    if plan.key != key || !acc_zero {
+        let fresh = plan.key != key;
+        plan.key = key;
+        resize_snug(&mut plan.own, n);
+        let block_of = |k: u32| cut[1..].partition_point(|&c| c <= k as usize);
+        let parts: Vec<_> = split_mut(acc, th)
+            .into_iter()
+            .zip(split_mut(&mut plan.own, th))
+            .collect();
+        team.each(parts, |t, (acc, own)| {
+            acc.fill(ForceData::default());
+            if !fresh {
+                return;
+            }
+            let o = bounds(n, th, t).start;
+            for (k, own) in own.iter_mut().enumerate() {
+                let (a, b) = (csr.start[o + k] as usize, csr.start[o + k + 1] as usize);
+                *own = a == b || block_of(csr.entries[a].0) == block_of(csr.entries[b - 1].0);
+            }
+        });
+    }
+    let own = &plan.own;
     let shared = SharedAcc::new(acc);
-    team.each(blocks, |_, block| {
-        let mut sink = Sink::Block {
-            acc: shared,
-            own: &own,
-        };
+    team.each(blocks, |t, block| {
+        let mut sink = Sink::Block { acc: shared, own };
         for pc in block {
             piece(path, pc, &mut sink, s, params, update_history);
         }
+        after_block(t);
     });
-    Sums::Blocks(own)
+    Sums::Blocks
 }
 
 /// The first `len` items of `s` (all of an empty `s`: an unwritten array), `s` advanced past them.
@@ -414,62 +428,71 @@ impl<'a> SharedAcc<'a> {
 pub(super) enum Sums {
     /// In `acc`, made in pair order as the pairs were evaluated (one thread).
     Accumulated,
-    /// Per particle: `true`, in `acc` as above (its pairs all lie in one block); `false`,
-    /// per touching pair in `out`, its side only (an apart pair's slot is not written
-    /// unless recorded), summed by [`PairSums::add`].
-    Blocks(Vec<bool>),
+    /// Per particle ([`BlockPlan::own`]): `true`, in `acc` as above (its pairs all lie in
+    /// one block); `false`, per touching pair in `out`, its side only (an apart pair's slot
+    /// is not written unless recorded), summed by [`PairSums::add`].
+    Blocks,
+}
+
+/// What the parallel [`pass`] keeps between steps.
+#[derive(Clone, Debug, Default)]
+pub(super) struct BlockPlan {
+    /// The list (its build in this process) and team size `own` was found for.
+    key: Option<(u64, usize)>,
+    /// Per particle: its pairs all lie in one block.
+    pub own: Vec<bool>,
+    /// Every particle's `acc` is zero: [`PairSums::add`] zeroes a sum it read, and the
+    /// blocks write only their own particles' sums. Set by the caller after summing every
+    /// particle; a pass that finds it unset zeroes `acc` itself. Measured on the fast state
+    /// (2 threads, avx512, alternating every 250 steps in one process): finding the owners
+    /// and zeroing the sums every step in a region of their own cost
+    /// about 2.6 ns per particle-step.
+    pub acc_zero: bool,
 }
 
 /// What the particles' pair sums are made from after a [`pass`].
 #[derive(Clone, Copy)]
 pub(super) struct PairSums<'a> {
-    pub sums: &'a Sums,
+    /// Per particle: its sum is in `acc` (one thread: every particle).
+    pub own: &'a [bool],
     pub csr: Csr<'a>,
-    pub acc: &'a [ForceData],
     pub out: &'a [(ForceData, ForceData)],
     pub state: &'a [PairState],
 }
 
 impl PairSums<'_> {
     /// Adds particle `q`'s pair sum to its force `f` and torque `t` (both +0 before): from
-    /// `acc` where the pass made it; otherwise the increments of its touching pairs (`state`)
+    /// its sum `acc` where the pass made it (then zeroed for the next pass, see
+    /// [`BlockPlan::acc_zero`]); otherwise the increments of its touching pairs (`state`)
     /// in `out`, in increasing pair index (the CSR `entries` are in that order), the additions
     /// of the serial pass in its order, so the same bits; the serial pass adds zeros for apart
     /// pairs, which change no bit (a sum started at +0 is never -0), so skipping them changes
     /// none either.
     #[inline(always)]
-    pub fn add(&self, q: usize, f: &mut V3, t: &mut V3) {
+    pub fn add(&self, q: usize, acc: &mut ForceData, f: &mut V3, t: &mut V3) {
         let PairSums {
-            sums,
+            own,
             csr,
-            acc,
             out,
             state,
         } = *self;
-        let own = match sums {
-            Sums::Accumulated => true,
-            Sums::Blocks(own) => own[q],
-        };
-        match own {
-            true => {
-                let a = &acc[q];
-                for c in 0..3 {
-                    f[c] += a.delta_f[c];
-                    t[c] += a.delta_torque[c];
-                }
+        if own.is_empty() || own[q] {
+            for c in 0..3 {
+                f[c] += acc.delta_f[c];
+                t[c] += acc.delta_torque[c];
             }
-            false => {
-                for &(k, is_i) in &csr.entries[csr.start[q] as usize..csr.start[q + 1] as usize] {
-                    if state[k as usize].contact == PairContact::Apart {
-                        continue;
-                    }
-                    let o = &out[k as usize];
-                    let d = if is_i { &o.0 } else { &o.1 };
-                    for c in 0..3 {
-                        f[c] += d.delta_f[c];
-                        t[c] += d.delta_torque[c];
-                    }
-                }
+            *acc = ForceData::default();
+            return;
+        }
+        for &(k, is_i) in &csr.entries[csr.start[q] as usize..csr.start[q + 1] as usize] {
+            if state[k as usize].contact == PairContact::Apart {
+                continue;
+            }
+            let o = &out[k as usize];
+            let d = if is_i { &o.0 } else { &o.1 };
+            for c in 0..3 {
+                f[c] += d.delta_f[c];
+                t[c] += d.delta_torque[c];
             }
         }
     }

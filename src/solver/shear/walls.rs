@@ -49,6 +49,22 @@ impl WallContext<'_> {
         wf: &mut (V3, V3),
         imp: &mut ([f64; 6], V3),
     ) -> bool {
+        *wf = ([0.0; 3], [0.0; 3]);
+        self.evaluate(q, slots, imp, |hit| apply(hit, f, t, wf))
+    }
+
+    /// Particle `q`'s plate contacts, each handed to `emit` in the order
+    /// [`WallContext::particle`] adds them; its records and implicit dashpot system updated.
+    /// A contact's force and torque do not depend on the particle's force sum, so they can
+    /// be found before the pair sums are complete and added after ([`apply`]). False when
+    /// the particle would hold more than [`MAX_WALL_CONTACTS`] records.
+    pub fn evaluate(
+        &self,
+        q: usize,
+        slots: &mut WallSlots,
+        imp: &mut ([f64; 6], V3),
+        mut emit: impl FnMut(&WallHit),
+    ) -> bool {
         let WallContext {
             params,
             meshes,
@@ -67,7 +83,6 @@ impl WallContext<'_> {
             update_history,
             trace,
         } = *self;
-        *wf = ([0.0; 3], [0.0; 3]);
         for m in 0..2u8 {
             // markAllContacts of this mesh
             for r in &mut slots.rec {
@@ -166,19 +181,42 @@ impl WallContext<'_> {
                 slots.rec[slot].force = fi.delta_f;
                 slots.rec[slot].torque = fi.delta_torque;
                 slots.rec[slot].face = hit.face;
-                let before = *f;
-                for c in 0..3 {
-                    f[c] += fi.delta_f[c];
-                    t[c] += fi.delta_torque[c];
-                }
-                let dest = if m == 1 { &mut wf.1 } else { &mut wf.0 };
-                for c in 0..3 {
-                    dest[c] += -(f[c] - before[c]);
-                }
+                emit(&WallHit {
+                    q: q as u32,
+                    mesh: m,
+                    force: fi.delta_f,
+                    torque: fi.delta_torque,
+                });
             }
             // cleanUpContacts of this mesh
             slots.rec.retain(|r| r.mesh != m || r.keep);
         }
         true
+    }
+}
+
+/// One plate contact's force and torque on a particle, from [`WallContext::evaluate`].
+#[derive(Clone, Copy, Debug)]
+pub(super) struct WallHit {
+    pub q: u32,
+    /// 0 the bottom plate, 1 the top.
+    pub mesh: u8,
+    pub force: V3,
+    pub torque: V3,
+}
+
+/// Adds a plate contact to the particle's force `f` and torque `t`, and its reaction to the
+/// plate's share `wf` (bottom, top) as fix_wall_gran does: the reaction is the change of
+/// the particle's force, `-(f_after - f_before)`, which rounds with `f`.
+#[inline]
+pub(super) fn apply(hit: &WallHit, f: &mut V3, t: &mut V3, wf: &mut (V3, V3)) {
+    let before = *f;
+    for c in 0..3 {
+        f[c] += hit.force[c];
+        t[c] += hit.torque[c];
+    }
+    let dest = if hit.mesh == 1 { &mut wf.1 } else { &mut wf.0 };
+    for c in 0..3 {
+        dest[c] += -(f[c] - before[c]);
     }
 }
