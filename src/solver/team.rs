@@ -14,7 +14,10 @@
 //! member's share of the work is fixed by its index ([`bounds`]), never stolen, so a region's
 //! partition, and with it every bit of the result, depends only on the team size (and the
 //! regions used here are bit-identical for any size, see the shear box's thread test).
-//! Rebuilds and the rarer whole-state passes keep using rayon.
+//! The neighbour rebuild's passes (divergence check, pair search, plate candidates) run on
+//! the team too: a rayon region there would wake rayon's worker beside the team's spinning
+//! one, three runnable threads on two cores. The rarer whole-state passes (output checks)
+//! keep using rayon.
 
 use std::cell::UnsafeCell;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};

@@ -5,8 +5,11 @@
 
 use super::{image_shift, ShearSim};
 use crate::error::{Error, Result};
+use crate::solver::team::{bounds, Team};
+
+/// A plate-triangle candidate of a particle: (mesh, triangle, image).
+type WallCand = (u8, u32, u8);
 use crate::solver::vec3::V3;
-use rayon::prelude::*;
 
 impl ShearSim {
     /// `Neighbor::decide` with `delay 0`: a rebuild a plate asked for at the previous step
@@ -35,7 +38,8 @@ impl ShearSim {
     /// First the divergence check ([`ShearSim::check_diverged`]): a blown-up state is an
     /// error naming the step and the particle, never a neighbour grid over a huge extent.
     pub(super) fn rebuild(&mut self) -> Result<()> {
-        self.check_diverged()?;
+        let team = self.team();
+        self.check_diverged(&team)?;
         let (lx, lz) = (self.box_.lx, self.box_.lz);
         for x in &mut self.x {
             if x[0] < 0.0 {
@@ -49,11 +53,10 @@ impl ShearSim {
                 x[2] -= lz;
             }
         }
-        let team = self.team();
         self.nl
             .build(&team, &self.x, &self.radius, self.case.skin, self.box_);
         self.rebuild_plates();
-        self.build_wall_candidates();
+        self.build_wall_candidates(&team);
         self.xhold.clone_from(&self.x);
         self.size_pair_buffers();
         Ok(())
@@ -63,19 +66,24 @@ impl ShearSim {
     /// LIGGGHTS' fixed y bounds, and no more than one box length outside the periodic x and z
     /// range (a sane run moves a particle less than skin/2 between checks, far less than
     /// that). Costs one pass over the particles per rebuild.
-    pub(super) fn check_diverged(&self) -> Result<()> {
+    pub(super) fn check_diverged(&self, team: &Team) -> Result<()> {
         let (lx, lz) = (self.box_.lx, self.box_.lz);
         let (ylo, yhi) = self.box_y;
-        let bad = self
-            .x
-            .par_iter()
-            .zip(self.v.par_iter())
-            .position_any(|(x, v)| {
-                !(x.iter().chain(v.iter()).all(|c| c.is_finite())
-                    && (-lx..2.0 * lx).contains(&x[0])
-                    && (ylo..=yhi).contains(&x[1])
-                    && (-lz..2.0 * lz).contains(&x[2]))
-            });
+        let (x, v) = (&self.x, &self.v);
+        let (th, n) = (team.threads(), x.len());
+        // the first bad particle of each share; the first of those
+        let bad = team
+            .map((0..th).collect(), |_, t| {
+                bounds(n, th, t).find(|&i| {
+                    !(x[i].iter().chain(v[i].iter()).all(|c| c.is_finite())
+                        && (-lx..2.0 * lx).contains(&x[i][0])
+                        && (ylo..=yhi).contains(&x[i][1])
+                        && (-lz..2.0 * lz).contains(&x[i][2]))
+                })
+            })
+            .into_iter()
+            .flatten()
+            .next();
         match bad {
             None => Ok(()),
             Some(i) => Err(Error::Solver {
@@ -120,7 +128,7 @@ impl ShearSim {
     /// bound of the triangle distance), and it keeps the order of the others, so the contacts
     /// found and the order their forces are summed in are unchanged: bitwise the same
     /// results, fewer sphere-triangle tests per step.
-    pub(super) fn build_wall_candidates(&mut self) {
+    pub(super) fn build_wall_candidates(&mut self, team: &Team) {
         let (lx, lz, skin) = (self.box_.lx, self.box_.lz, self.case.skin);
         let meshes = &self.meshes;
         let y_range: Vec<(f64, f64)> = meshes
@@ -134,12 +142,15 @@ impl ShearSim {
                     })
             })
             .collect();
-        let per: Vec<Vec<(u8, u32, u8)>> = self
-            .x
-            .par_iter()
-            .zip(self.radius.par_iter())
-            .map(|(p, r)| {
-                let mut c = Vec::new();
+        // each share's candidates in particle order, with its particles' counts; joined in
+        // share order
+        let (x, radius) = (&self.x, &self.radius);
+        let (th, n) = (team.threads(), x.len());
+        let per: Vec<(Vec<WallCand>, Vec<u32>)> = team.map((0..th).collect(), |_, share| {
+            let (mut c, mut counts) = (Vec::new(), Vec::with_capacity(bounds(n, th, share).len()));
+            for q in bounds(n, th, share) {
+                let (p, r) = (&x[q], radius[q]);
+                let before = c.len();
                 for (m, mesh) in meshes.iter().enumerate() {
                     // a particle farther than r + skin from the mesh's y extent has no
                     // candidate in it (each triangle's box test would fail): skip the mesh
@@ -167,15 +178,19 @@ impl ShearSim {
                         }
                     }
                 }
-                c
-            })
-            .collect();
+                counts.push((c.len() - before) as u32);
+            }
+            (c, counts)
+        });
         self.wall_start.clear();
         self.wall_start.push(0);
         self.wall_cand.clear();
-        for c in per {
+        for (c, counts) in per {
+            for k in counts {
+                let last = *self.wall_start.last().unwrap_or(&0);
+                self.wall_start.push(last + k);
+            }
             self.wall_cand.extend(c);
-            self.wall_start.push(self.wall_cand.len() as u32);
         }
         self.drop_records_without_candidates();
     }

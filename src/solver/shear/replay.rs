@@ -203,7 +203,7 @@ impl ShearSim {
                 ),
             });
         }
-        self.build_wall_candidates();
+        self.build_wall_candidates(&team);
         self.wall = vec![WallSlots::default(); n];
         for &(q, mesh, tri, hist) in &st.walls {
             let (q, ntri) = (
