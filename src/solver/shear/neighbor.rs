@@ -47,6 +47,16 @@ pub struct NeighborList {
     pub generation: u64,
 }
 
+/// The cell offsets to scan along a periodic axis of `cells` cells, each neighbour cell once
+/// (with two cells, -1 and +1 are the same cell).
+fn cell_offsets(cells: usize) -> &'static [isize] {
+    match cells {
+        0 | 1 => &[0],
+        2 => &[0, 1],
+        _ => &[-1, 0, 1],
+    }
+}
+
 /// Spare capacity kept beside `n` per-pair values: 1/8 and 64 more, enough for the list's
 /// growth between builds without doubling what is held.
 pub(super) fn spare(n: usize) -> usize {
@@ -152,6 +162,7 @@ impl NeighborList {
         let th = team.threads();
         let cap = new_pairs.capacity();
         let mut first = Some(new_pairs);
+        let (xs, zs) = (cell_offsets(nx), cell_offsets(nz));
         let mut shares = team.map((0..th).map(|_| first.take()).collect(), |t, list| {
             let range = bounds(n, th, t);
             let mut new_pairs = list.unwrap_or_else(|| Vec::with_capacity(cap * range.len() / n));
@@ -160,20 +171,6 @@ impl NeighborList {
             for i in range {
                 let (ix, iy, iz) = (cx(x[i][0]), cy(x[i][1]), cz(x[i][2]));
                 cand.clear();
-                let xs: &[isize] = if nx >= 3 {
-                    &[-1, 0, 1]
-                } else if nx == 2 {
-                    &[0, 1]
-                } else {
-                    &[0]
-                };
-                let zs: &[isize] = if nz >= 3 {
-                    &[-1, 0, 1]
-                } else if nz == 2 {
-                    &[0, 1]
-                } else {
-                    &[0]
-                };
                 for &dx in xs {
                     for dy in [-1isize, 0, 1] {
                         let gy = iy as isize + dy;
