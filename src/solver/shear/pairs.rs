@@ -226,7 +226,7 @@ pub(super) fn pass(
     // bytes per listed pair, about 430 B per particle, not held)
     let write_out = record || !serial;
     if write_out {
-        super::neighbor::resize_snug(out, np);
+        resize_snug(out, np);
     }
     // One block of pairs per thread: block t holds the pairs found from the particles of
     // share t ([`bounds`]; the list is in the order of the particle a pair was found from,
