@@ -151,6 +151,16 @@ pub struct ShearSim {
     record_pair_forces: bool,
     /// Per particle, the sum of its pair increments in pair order ([`pairs::pass`]).
     acc: Vec<ForceData>,
+    /// The SIMD passes' packed particle records ([`pairs::Packed`]) of `x`, `v`, `omega`,
+    /// `radius`, `mass` (empty on the scalar path): written by the drift of [`Self::step`]
+    /// (`packed_current`), else by [`Self::pack_particles`] before the pass.
+    #[serde(skip)]
+    packed: Vec<pairs::Packed>,
+    /// `packed` holds the particles as the drift left them, and nothing changed them since:
+    /// set by the drift, cleared by a rebuild (which wraps positions) and by the pass that
+    /// read it, so that a pass entered any other way (setup, tests, replays) packs anew.
+    #[serde(skip)]
+    packed_current: bool,
     /// Per pair, its contact state at the last force evaluation.
     pair_state: Vec<PairState>,
     /// epsd_implicit: per pair the dashpot coefficient and contact normal (empty otherwise:
@@ -299,6 +309,8 @@ impl ShearSim {
             pair_force: Vec::new(),
             record_pair_forces: false,
             acc: vec![ForceData::default(); n],
+            packed: Vec::new(),
+            packed_current: false,
             pair_state: Vec::new(),
             pair_damp: Vec::new(),
             imp: if case.models.rolling == crate::spec::RollingModel::EpsdImplicit {
@@ -411,6 +423,11 @@ impl ShearSim {
         let n = self.x.len();
         let (kick, f, torque) = (&self.kick, &self.f, &self.torque);
         let (xhold, skin) = (&self.xhold, self.case.skin);
+        let (radius, mass) = (&self.radius, &self.mass);
+        // the SIMD passes' packed records written as the particles drift
+        let pack = self.kernel != KernelPath::Scalar;
+        self.packed
+            .resize(if pack { n } else { 0 }, Default::default());
         // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
         // (some atom moved more than skin/2 since the last build)
         let parts: Vec<_> = split_mut(&mut self.x, th)
@@ -418,9 +435,10 @@ impl ShearSim {
             .zip(split_mut(&mut self.v, th))
             .zip(split_mut(&mut self.omega, th))
             .zip(split_mut(&mut self.rotation, th))
+            .zip(split_mut(&mut self.packed, th))
             .collect();
         let moved = team
-            .map(parts, |t, (((x, v), w), rot)| {
+            .map(parts, |t, ((((x, v), w), rot), packed)| {
                 let o = bounds(n, th, t).start;
                 let mut moved = false;
                 for k in 0..x.len() {
@@ -430,10 +448,14 @@ impl ShearSim {
                         rot[k][c] += w[k][c] * dt;
                     }
                     moved |= moved_beyond_half_skin(x[k], xhold[i], skin);
+                    if pack {
+                        packed[k] = pairs::Packed::new(x[k], radius[i], v[k], mass[i], w[k]);
+                    }
                 }
                 moved
             })
             .contains(&true);
+        self.packed_current = pack;
         self.lap(|p| &mut p.integrate);
         self.move_plates();
         self.lap(|p| &mut p.plates);
@@ -481,6 +503,28 @@ impl ShearSim {
         }
     }
 
+    /// Makes `packed` the SIMD passes' records of the particles as they are, unless the
+    /// drift just wrote them (`packed_current`, consumed here); empty on the scalar path.
+    fn pack_particles(&mut self, team: &Team) {
+        let current = std::mem::take(&mut self.packed_current);
+        let n = if self.kernel == KernelPath::Scalar {
+            0
+        } else {
+            self.x.len()
+        };
+        if current && self.packed.len() == n {
+            return;
+        }
+        self.packed.resize(n, Default::default());
+        let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
+        let th = team.threads();
+        team.each(split_mut(&mut self.packed, th), |t, packed| {
+            for (p, i) in packed.iter_mut().zip(bounds(n, th, t)) {
+                *p = pairs::Packed::new(x[i], radius[i], v[i], mass[i], omega[i]);
+            }
+        });
+    }
+
     /// The plates' initial_integrate: the servo moves the top plate, `move/mesh linear` the
     /// bottom one.
     fn move_plates(&mut self) {
@@ -501,6 +545,7 @@ impl ShearSim {
         let team = self.team();
         let th = team.threads();
         let n = self.x.len();
+        self.pack_particles(&team);
         let params = &self.params;
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
         let implicit = self.implicit;
@@ -578,6 +623,7 @@ impl ShearSim {
                 omega,
                 radius,
                 mass,
+                packed: &self.packed,
             },
             params,
             update_history,

@@ -2,11 +2,12 @@
 //! one of two kernel paths that give the same bits (tested on dense sheared states):
 //! - [`KernelPath::Scalar`]: [`surfaces_intersect`], the kernels that mirror LIGGGHTS'
 //!   headers one contact at a time (also what the contact cases and the walls use);
-//! - [`KernelPath::Avx512`]: [`batch::pair`] on 8 touching pairs at once (found by a scalar
-//!   touch test over the listed pairs), their particles' data copied into lane arrays, the
+//! - [`KernelPath::Avx512`]: [`batch::pair`] on 8 touching pairs at once (found by the same
+//!   test on 8 listed pairs at once), their inputs loaded as 32-byte rows of packed particle
+//!   records ([`Packed`]), pair records and histories and transposed into lanes, the
 //!   results written back per pair. Chosen at run time where the CPU has AVX-512F and DQ;
-//! - [`KernelPath::Avx2`]: the same pass with the 8 staged lanes evaluated as two AVX
-//!   vectors of 4 (CPUs with AVX2 but without AVX-512).
+//! - [`KernelPath::Avx2`]: the same pass on two AVX vectors of 4 lanes (CPUs with AVX2 but
+//!   without AVX-512).
 //!
 //! [`batch::pair`]: crate::solver::contact::batch::pair
 //!
@@ -157,6 +158,27 @@ pub(super) struct Particles<'a> {
     pub omega: &'a [V3],
     pub radius: &'a [f64],
     pub mass: &'a [f64],
+    /// The same values packed per particle ([`Packed`]): read by the SIMD paths, which
+    /// require it whole; empty on the scalar path.
+    pub packed: &'a [Packed],
+}
+
+/// One particle's pass inputs in three 32-byte rows, `[x0 x1 x2 r | v0 v1 v2 m | w0 w1 w2 0]`,
+/// so that a SIMD path loads a row with one instruction and transposes 8 (AVX-512) or 4
+/// (AVX2) of them into 4 vectors of lanes, instead of copying 11 scalars per particle into
+/// lane arrays. Written by the drift ([`super::ShearSim::step`]), copies of the particle
+/// arrays: the same bits.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+pub(super) struct Packed(pub [f64; 12]);
+
+impl Packed {
+    #[inline(always)]
+    pub fn new(x: V3, r: f64, v: V3, m: f64, w: V3) -> Self {
+        Packed([
+            x[0], x[1], x[2], r, v[0], v[1], v[2], m, w[0], w[1], w[2], 0.0,
+        ])
+    }
 }
 
 /// Adds one increment to a particle's sum.
@@ -603,45 +625,14 @@ fn scalar_one(
 
 #[cfg(target_arch = "x86_64")]
 mod simd {
+    use super::super::neighbor::Pair;
     use super::super::{PairContact, PairDamp, PairState};
     use super::{KernelPath, Particles, Piece, Sink, CHUNK};
     use crate::solver::contact::batch::{self, PairIn};
-    use crate::solver::contact::lanes::{F4, F8};
+    use crate::solver::contact::lanes::{Lanes, F4, F8};
     use crate::solver::contact::{ContactHistory, ForceData};
     use crate::solver::material::PairParams;
-
-    /// The inputs of 8 lanes, one array per scalar input (lane `l` of input `n` at
-    /// `[n][l]`), which the kernel loads as vectors. Filled by scalar copies from the pair
-    /// records and the particle arrays: on this machine's AVX-512 (AMD EPYC, Zen 4) a gather
-    /// of 8 doubles costs more than 8 scalar loads and stores. Measured on the fast state
-    /// (`verify bench`, 1 thread): the pair pass went from 135 to 91 ns per particle-step
-    /// when the 30 gathers per group of 8 touching pairs and the 13 per group of 8 listed
-    /// pairs of the touch test were replaced by these copies and a scalar touch test.
-    #[repr(C, align(64))]
-    pub(super) struct Stage([[f64; 8]; 31]);
-
-    const XI: usize = 0;
-    const XJ: usize = 3;
-    const SHIFT: usize = 6;
-    const RADI: usize = 9;
-    const RADJ: usize = 10;
-    const MI: usize = 11;
-    const MJ: usize = 12;
-    const VI: usize = 13;
-    const VJ: usize = 16;
-    const WI: usize = 19;
-    const WJ: usize = 22;
-    const SHEAR: usize = 25;
-    const RTORQUE: usize = 28;
-
-    impl Stage {
-        #[inline(always)]
-        fn put3(&mut self, at: usize, l: usize, v: &[f64; 3]) {
-            self.0[at][l] = v[0];
-            self.0[at + 1][l] = v[1];
-            self.0[at + 2][l] = v[2];
-        }
-    }
+    use std::arch::x86_64::*;
 
     /// The outputs of 8 lanes as arrays (lane `l` of component `c` at `[c][l]`) and the
     /// masks as bits (lane `l` at bit `l`).
@@ -659,32 +650,182 @@ mod simd {
         sliding: u8,
     }
 
-    /// A SIMD width evaluating 8 staged lanes through [`batch::pair`].
+    /// A SIMD width evaluating 8 lanes through [`batch::pair`].
     pub(super) trait Eval8 {
+        /// The pairs `ks` (8 indices into `pairs` and `hist`) as 8 lanes.
+        ///
         /// # Safety
-        /// The target features of the implementing path.
-        unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8;
+        /// The target features of the implementing path; every index in `ks` in bounds of
+        /// `pairs` and `hist`, every particle index of those pairs in bounds of `s` and of
+        /// `s.packed`.
+        unsafe fn eval8(
+            ks: &[u16],
+            pairs: &[Pair],
+            hist: &[ContactHistory],
+            s: Particles,
+            params: &PairParams,
+            update_history: bool,
+        ) -> Out8;
+
+        /// Which of the 8 `pairs` touch (bit `l`: `pairs[l]`), [`touch_lanes`].
+        ///
+        /// # Safety
+        /// The target features of the implementing path; every particle index of `pairs`
+        /// in bounds of `s.packed`.
+        unsafe fn touch8(pairs: &[Pair], s: Particles) -> u8;
     }
 
-    /// The kernel's inputs from the staged rows, `one(row)` loading one row's lanes.
+    /// 8 rows of 4 doubles (`a[l]`, lane `l`) as 4 vectors of 8 lanes (vector `c` holds
+    /// element `c` of every row): 4 inserts, 4 unpacks and 4 two-source permutes.
     #[inline(always)]
-    fn pair_in<L: Copy>(one: impl Fn(usize) -> L) -> PairIn<L> {
-        let three = |at: usize| [one(at), one(at + 1), one(at + 2)];
-        PairIn {
-            xi: three(XI),
-            xj: three(XJ),
-            shift: three(SHIFT),
-            radi: one(RADI),
-            radj: one(RADJ),
-            mi: one(MI),
-            mj: one(MJ),
-            vi: three(VI),
-            vj: three(VJ),
-            wi: three(WI),
-            wj: three(WJ),
-            shear: three(SHEAR),
-            r_torque: three(RTORQUE),
+    unsafe fn transpose8x4(a: [__m256d; 8]) -> [F8; 4] {
+        let z0 = _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(a[0]), a[4]);
+        let z1 = _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(a[1]), a[5]);
+        let z2 = _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(a[2]), a[6]);
+        let z3 = _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(a[3]), a[7]);
+        // u0 = [a0.0 a1.0 a0.2 a1.2 | a4.0 a5.0 a4.2 a5.2], u1 likewise with elements 1, 3
+        let u0 = _mm512_unpacklo_pd(z0, z1);
+        let u1 = _mm512_unpackhi_pd(z0, z1);
+        let u2 = _mm512_unpacklo_pd(z2, z3);
+        let u3 = _mm512_unpackhi_pd(z2, z3);
+        let lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+        let hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+        [
+            F8(_mm512_permutex2var_pd(u0, lo, u2)),
+            F8(_mm512_permutex2var_pd(u1, lo, u3)),
+            F8(_mm512_permutex2var_pd(u0, hi, u2)),
+            F8(_mm512_permutex2var_pd(u1, hi, u3)),
+        ]
+    }
+
+    /// Which of `pairs` (one per lane of `L`) touch: [`batch::touching`] on the rows of the
+    /// packed records (`[x r]`) and the pair records (`[i j | shift]`). Measured on the fast
+    /// state (1 thread, avx512, alternating every 250 steps in one process with the test one
+    /// pair at a time): 0.4-1.0 % less time per step (2.4 % on the AVX2 path).
+    ///
+    /// # Safety
+    /// The target features of `L`; every particle index of `pairs` in bounds of `s.packed`.
+    #[inline(always)]
+    unsafe fn touch_lanes<L: Rows + Lanes>(pairs: &[Pair], s: Particles) -> L::M {
+        let n = pairs.len();
+        let (mut pi, mut pj, mut pp) = (
+            [std::ptr::null(); 8],
+            [std::ptr::null(); 8],
+            [std::ptr::null(); 8],
+        );
+        for (l, p) in pairs.iter().enumerate() {
+            pi[l] = s.packed.get_unchecked(p.i as usize).0.as_ptr();
+            pj[l] = s.packed.get_unchecked(p.j as usize).0.as_ptr();
+            pp[l] = p as *const Pair as *const f64;
         }
+        let [xi0, xi1, xi2, radi] = L::rows(&pi[..n]);
+        let [xj0, xj1, xj2, radj] = L::rows(&pj[..n]);
+        let [_, s0, s1, s2] = L::rows(&pp[..n]);
+        batch::touching([xi0, xi1, xi2], [xj0, xj1, xj2], [s0, s1, s2], radi, radj)
+    }
+
+    /// Lanes that load 32-byte rows and transpose them ([`lane_inputs`]).
+    pub(super) trait Rows: Copy {
+        /// The rows at `at[l]` (lane `l`, one per lane) as 4 vectors of lanes, vector `c`
+        /// holding element `c` of every row.
+        ///
+        /// # Safety
+        /// The target features of the lanes; 32 readable bytes at each pointer, as many
+        /// pointers as lanes.
+        unsafe fn rows(at: &[*const f64]) -> [Self; 4];
+    }
+
+    impl Rows for F8 {
+        #[inline(always)]
+        unsafe fn rows(at: &[*const f64]) -> [F8; 4] {
+            transpose8x4(std::array::from_fn(|l| _mm256_loadu_pd(at[l])))
+        }
+    }
+
+    impl Rows for F4 {
+        #[inline(always)]
+        unsafe fn rows(at: &[*const f64]) -> [F4; 4] {
+            transpose4x4(std::array::from_fn(|l| _mm256_loadu_pd(at[l])))
+        }
+    }
+
+    /// The kernel's inputs of the pairs `ks` (indices into `pairs` and `hist`, one per lane
+    /// of `L`): every row a lane needs is loaded whole (32 bytes) from the particles' packed
+    /// records (`[x r | v m | w 0]`, [`super::Packed`]), the pair record (`[i j | shift]`)
+    /// and the history (`[shear | r_torque]`, read as its first and last 32 bytes), and
+    /// transposed into vectors of lanes ([`Rows`]). Measured on the fast state (1 thread,
+    /// avx512, alternating every 250 steps in one process with lane arrays filled by 31
+    /// scalar copies per lane): 19-20 % less time per step (the copies were bound by their
+    /// stores, which the kernel's vector loads then waited for).
+    ///
+    /// # Safety
+    /// As [`Eval8::eval8`], with the target features of `L`.
+    #[inline(always)]
+    unsafe fn lane_inputs<L: Rows>(
+        ks: &[u16],
+        pairs: &[Pair],
+        hist: &[ContactHistory],
+        s: Particles,
+    ) -> PairIn<L> {
+        let n = ks.len();
+        let (mut pi, mut pj, mut pp, mut ph) = (
+            [std::ptr::null(); 8],
+            [std::ptr::null(); 8],
+            [std::ptr::null(); 8],
+            [std::ptr::null(); 8],
+        );
+        for l in 0..n {
+            let k = *ks.get_unchecked(l) as usize;
+            let p = pairs.get_unchecked(k);
+            pi[l] = s.packed.get_unchecked(p.i as usize).0.as_ptr();
+            pj[l] = s.packed.get_unchecked(p.j as usize).0.as_ptr();
+            pp[l] = p as *const Pair as *const f64;
+            ph[l] = hist.get_unchecked(k) as *const ContactHistory as *const f64;
+        }
+        let at = |base: &[*const f64; 8], off: usize| -> [*const f64; 8] {
+            std::array::from_fn(|l| base[l].wrapping_add(off))
+        };
+        let [xi0, xi1, xi2, radi] = L::rows(&at(&pi, 0)[..n]);
+        let [vi0, vi1, vi2, mi] = L::rows(&at(&pi, 4)[..n]);
+        let [wi0, wi1, wi2, _] = L::rows(&at(&pi, 8)[..n]);
+        let [xj0, xj1, xj2, radj] = L::rows(&at(&pj, 0)[..n]);
+        let [vj0, vj1, vj2, mj] = L::rows(&at(&pj, 4)[..n]);
+        let [wj0, wj1, wj2, _] = L::rows(&at(&pj, 8)[..n]);
+        let [_, s0, s1, s2] = L::rows(&pp[..n]);
+        let [sh0, sh1, sh2, rt0] = L::rows(&ph[..n]);
+        let [_, _, rt1, rt2] = L::rows(&at(&ph, 2)[..n]);
+        PairIn {
+            xi: [xi0, xi1, xi2],
+            xj: [xj0, xj1, xj2],
+            shift: [s0, s1, s2],
+            radi,
+            radj,
+            mi,
+            mj,
+            vi: [vi0, vi1, vi2],
+            vj: [vj0, vj1, vj2],
+            wi: [wi0, wi1, wi2],
+            wj: [wj0, wj1, wj2],
+            shear: [sh0, sh1, sh2],
+            r_torque: [rt0, rt1, rt2],
+        }
+    }
+
+    /// 4 rows of 4 doubles (`a[l]`, lane `l`) as 4 vectors of 4 lanes (vector `c` holds
+    /// element `c` of every row): 4 unpacks and 4 lane permutes.
+    #[inline(always)]
+    unsafe fn transpose4x4(a: [__m256d; 4]) -> [F4; 4] {
+        // t0 = [a0.0 a1.0 a0.2 a1.2], t1 likewise with elements 1, 3
+        let t0 = _mm256_unpacklo_pd(a[0], a[1]);
+        let t1 = _mm256_unpackhi_pd(a[0], a[1]);
+        let t2 = _mm256_unpacklo_pd(a[2], a[3]);
+        let t3 = _mm256_unpackhi_pd(a[2], a[3]);
+        [
+            F4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
+            F4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
+            F4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
+            F4(_mm256_permute2f128_pd::<0x31>(t1, t3)),
+        ]
     }
 
     /// AVX-512: the 8 lanes in one vector.
@@ -694,8 +835,20 @@ mod simd {
 
     impl Eval8 for Avx512 {
         #[inline(always)]
-        unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8 {
-            let inp = pair_in(|at| F8::load(&st.0[at]));
+        unsafe fn touch8(pairs: &[Pair], s: Particles) -> u8 {
+            touch_lanes::<F8>(pairs, s).bits()
+        }
+
+        #[inline(always)]
+        unsafe fn eval8(
+            ks: &[u16],
+            pairs: &[Pair],
+            hist: &[ContactHistory],
+            s: Particles,
+            params: &PairParams,
+            update_history: bool,
+        ) -> Out8 {
+            let inp = lane_inputs::<F8>(ks, pairs, hist, s);
             let o = batch::pair(&inp, params, update_history);
             let arr = |v: [F8; 3]| [v[0].to_array(), v[1].to_array(), v[2].to_array()];
             Out8 {
@@ -716,7 +869,19 @@ mod simd {
 
     impl Eval8 for Avx2 {
         #[inline(always)]
-        unsafe fn eval8(st: &Stage, params: &PairParams, update_history: bool) -> Out8 {
+        unsafe fn touch8(pairs: &[Pair], s: Particles) -> u8 {
+            touch_lanes::<F4>(&pairs[..4], s).bits() | touch_lanes::<F4>(&pairs[4..], s).bits() << 4
+        }
+
+        #[inline(always)]
+        unsafe fn eval8(
+            ks: &[u16],
+            pairs: &[Pair],
+            hist: &[ContactHistory],
+            s: Particles,
+            params: &PairParams,
+            update_history: bool,
+        ) -> Out8 {
             let mut r = Out8 {
                 fi: [[0.0; 8]; 3],
                 ti: [[0.0; 8]; 3],
@@ -731,7 +896,7 @@ mod simd {
                 sliding: 0,
             };
             for half in [0, 4] {
-                let inp = pair_in(|at| F4::load(&st.0[at][half..half + 4]));
+                let inp = lane_inputs::<F4>(&ks[half..half + 4], pairs, hist, s);
                 let o = batch::pair(&inp, params, update_history);
                 let put = |dst: &mut [[f64; 8]; 3], v: [F4; 3]| {
                     for c in 0..3 {
@@ -796,8 +961,9 @@ mod simd {
     entry!(chunk_avx512, "avx512f,avx512dq", Avx512);
     entry!(chunk_avx2, "avx,avx2", Avx2);
 
-    /// The pairs of one piece: first which of them touch (one at a time, the kernel's own
-    /// test [`batch::touching`] on the same operations, so the same answer); then the
+    /// The pairs of one piece: first which of them touch (8 at a time on lanes of `E`, the
+    /// last few one at a time: the kernel's own test [`batch::touching`] on the same
+    /// operations, so the same answer); then the
     /// touching ones, 8 at a time, through [`batch::pair`] (8 lanes of `E`), their
     /// increments added to `sum` in pair order when given (the serial pass) and written to
     /// `out` when it is held (the parallel pass, which sums afterwards, and observers), the
@@ -807,7 +973,7 @@ mod simd {
     /// # Safety
     /// The target features of `E` (entered through [`chunk_avx512`], [`chunk_avx2`]); the
     /// piece's slices as [`Piece`] says, at most [`CHUNK`] pairs; particle indices in
-    /// bounds of `s`.
+    /// bounds of `s` (whose `packed` records are current).
     #[inline(always)]
     unsafe fn chunk<E: Eval8>(
         pc: Piece,
@@ -830,7 +996,7 @@ mod simd {
         assert!((!held || out.len() == n) && (!implicit || damp.len() == n));
         let np = s.x.len();
         assert!(s.v.len() == np && s.omega.len() == np && s.radius.len() == np);
-        assert!(s.mass.len() == np);
+        assert!(s.mass.len() == np && s.packed.len() == np);
         // 1. which pairs touch; every state (and recorded force) slot starts cleared, the
         // touching pairs' are written in step 2
         state.fill(PairState::default());
@@ -841,7 +1007,17 @@ mod simd {
         // (8 spare slots: the last group of step 2 reads 8 and writes back `count`)
         let mut touching = [0u16; CHUNK + 8];
         let mut nt = 0;
-        for (k, p) in pairs.iter().enumerate() {
+        // 8 pairs at a time on lanes, the rest one at a time
+        let whole = n / 8 * 8;
+        for k0 in (0..whole).step_by(8) {
+            let m = E::touch8(pairs.get_unchecked(k0..k0 + 8), s);
+            for l in 0..8 {
+                // appended without a branch: the slot is overwritten unless the pair touches
+                touching[nt] = (k0 + l) as u16;
+                nt += usize::from((m >> l) & 1);
+            }
+        }
+        for (k, p) in pairs.iter().enumerate().skip(whole) {
             let (i, j) = (p.i as usize, p.j as usize);
             debug_assert!(i < np && j < np);
             let t = batch::touching::<f64>(
@@ -856,32 +1032,13 @@ mod simd {
             nt += usize::from(t);
         }
         // 2. the touching pairs
-        let mut st = Stage([[0.0; 8]; 31]);
         let mut t0 = 0;
         while t0 < nt {
             let count = (nt - t0).min(8);
             // lanes beyond `count` hold earlier or zero indices of this chunk: valid pairs,
             // computed and not written back
             let ks = &touching[t0..t0 + 8];
-            for (l, &k) in ks.iter().enumerate() {
-                let p = pairs.get_unchecked(k as usize);
-                let (i, j) = (p.i as usize, p.j as usize);
-                st.put3(XI, l, s.x.get_unchecked(i));
-                st.put3(XJ, l, s.x.get_unchecked(j));
-                st.put3(SHIFT, l, &p.shift);
-                st.0[RADI][l] = *s.radius.get_unchecked(i);
-                st.0[RADJ][l] = *s.radius.get_unchecked(j);
-                st.0[MI][l] = *s.mass.get_unchecked(i);
-                st.0[MJ][l] = *s.mass.get_unchecked(j);
-                st.put3(VI, l, s.v.get_unchecked(i));
-                st.put3(VJ, l, s.v.get_unchecked(j));
-                st.put3(WI, l, s.omega.get_unchecked(i));
-                st.put3(WJ, l, s.omega.get_unchecked(j));
-                let h = hist.get_unchecked(k as usize);
-                st.put3(SHEAR, l, &h.shear);
-                st.put3(RTORQUE, l, &h.r_torque);
-            }
-            let o = E::eval8(&st, params, update_history);
+            let o = E::eval8(ks, pairs, hist, s, params, update_history);
             let (fi, ti, fj, tj) = (&o.fi, &o.ti, &o.fj, &o.tj);
             let (sh, rt, en) = (&o.shear, &o.r_torque, &o.en);
             let damping = o.damping;

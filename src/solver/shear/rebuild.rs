@@ -41,6 +41,8 @@ impl ShearSim {
         let team = self.team();
         self.check_diverged(&team)?;
         let (lx, lz) = (self.box_.lx, self.box_.lz);
+        // the wrap changes positions the drift packed
+        self.packed_current = false;
         for x in &mut self.x {
             if x[0] < 0.0 {
                 x[0] += lx;
