@@ -421,13 +421,18 @@ impl ShearSim {
         let team = self.team();
         let th = team.threads();
         let n = self.x.len();
+        // the SIMD passes' packed records written as the particles drift (their radius and
+        // mass, which do not change, once when made). Measured on the fast state (1 thread,
+        // avx512, alternating every 250 steps in one process): writing the whole record in
+        // the drift cost 2-4 % more per step than writing the moving values only.
+        let pack = self.kernel != KernelPath::Scalar;
+        if !pack {
+            self.packed = Vec::new();
+        } else if self.packed.len() != n {
+            self.pack_all(&team);
+        }
         let (kick, f, torque) = (&self.kick, &self.f, &self.torque);
         let (xhold, skin) = (&self.xhold, self.case.skin);
-        let (radius, mass) = (&self.radius, &self.mass);
-        // the SIMD passes' packed records written as the particles drift
-        let pack = self.kernel != KernelPath::Scalar;
-        self.packed
-            .resize(if pack { n } else { 0 }, Default::default());
         // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
         // (some atom moved more than skin/2 since the last build)
         let parts: Vec<_> = split_mut(&mut self.x, th)
@@ -449,7 +454,7 @@ impl ShearSim {
                     }
                     moved |= moved_beyond_half_skin(x[k], xhold[i], skin);
                     if pack {
-                        packed[k] = pairs::Packed::new(x[k], radius[i], v[k], mass[i], w[k]);
+                        packed[k].moved(x[k], v[k], w[k]);
                     }
                 }
                 moved
@@ -507,14 +512,16 @@ impl ShearSim {
     /// drift just wrote them (`packed_current`, consumed here); empty on the scalar path.
     fn pack_particles(&mut self, team: &Team) {
         let current = std::mem::take(&mut self.packed_current);
-        let n = if self.kernel == KernelPath::Scalar {
-            0
-        } else {
-            self.x.len()
-        };
-        if current && self.packed.len() == n {
-            return;
+        if self.kernel == KernelPath::Scalar {
+            self.packed = Vec::new();
+        } else if !current || self.packed.len() != self.x.len() {
+            self.pack_all(team);
         }
+    }
+
+    /// Makes `packed` the records of every particle as it is ([`pairs::Packed::new`]).
+    fn pack_all(&mut self, team: &Team) {
+        let n = self.x.len();
         self.packed.resize(n, Default::default());
         let (x, v, omega, radius, mass) = (&self.x, &self.v, &self.omega, &self.radius, &self.mass);
         let th = team.threads();

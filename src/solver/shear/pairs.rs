@@ -166,8 +166,8 @@ pub(super) struct Particles<'a> {
 /// One particle's pass inputs in three 32-byte rows, `[x0 x1 x2 r | v0 v1 v2 m | w0 w1 w2 0]`,
 /// so that a SIMD path loads a row with one instruction and transposes 8 (AVX-512) or 4
 /// (AVX2) of them into 4 vectors of lanes, instead of copying 11 scalars per particle into
-/// lane arrays. Written by the drift ([`super::ShearSim::step`]), copies of the particle
-/// arrays: the same bits.
+/// lane arrays. Copies of the particle arrays (the same bits): the moving values written by
+/// the drift ([`super::ShearSim::step`]), the radius and mass when the records are made.
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(32))]
 pub(super) struct Packed(pub [f64; 12]);
@@ -178,6 +178,14 @@ impl Packed {
         Packed([
             x[0], x[1], x[2], r, v[0], v[1], v[2], m, w[0], w[1], w[2], 0.0,
         ])
+    }
+
+    /// The values that change as a particle moves (its radius and mass kept).
+    #[inline(always)]
+    pub fn moved(&mut self, x: V3, v: V3, w: V3) {
+        self.0[0..3].copy_from_slice(&x);
+        self.0[4..7].copy_from_slice(&v);
+        self.0[8..11].copy_from_slice(&w);
     }
 }
 
