@@ -175,6 +175,7 @@ impl ShearSim {
                     + b(&self.acc)
                     + ftv,
             ),
+            ("packed particle records", b(&self.packed)),
             ("pair list", b(&self.nl.pairs)),
             ("pair histories", b(&self.nl.hist)),
             ("pair states", b(&self.pair_state)),
