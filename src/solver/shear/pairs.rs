@@ -716,20 +716,30 @@ mod simd {
     #[inline(always)]
     unsafe fn touch_lanes<L: Rows + Lanes>(pairs: &[Pair], s: Particles) -> L::M {
         let n = pairs.len();
-        let (mut pi, mut pj, mut pp) = (
-            [std::ptr::null(); 8],
-            [std::ptr::null(); 8],
-            [std::ptr::null(); 8],
-        );
-        for (l, p) in pairs.iter().enumerate() {
-            pi[l] = s.packed.get_unchecked(p.i as usize).0.as_ptr();
-            pj[l] = s.packed.get_unchecked(p.j as usize).0.as_ptr();
-            pp[l] = p as *const Pair as *const f64;
-        }
+        let [pi, pj, pp] = record_ptrs(pairs.iter(), s);
         let [xi0, xi1, xi2, radi] = L::rows(&pi[..n]);
         let [xj0, xj1, xj2, radj] = L::rows(&pj[..n]);
         let [_, s0, s1, s2] = L::rows(&pp[..n]);
         batch::touching([xi0, xi1, xi2], [xj0, xj1, xj2], [s0, s1, s2], radi, radj)
+    }
+
+    /// Per lane (at most 8), the addresses of its pair's records: its `i`'s and its `j`'s
+    /// packed particle records, and the pair record.
+    ///
+    /// # Safety
+    /// Every particle index of the pairs in bounds of `s.packed`.
+    #[inline(always)]
+    unsafe fn record_ptrs<'a>(
+        lanes: impl Iterator<Item = &'a Pair>,
+        s: Particles,
+    ) -> [[*const f64; 8]; 3] {
+        let mut at = [[std::ptr::null(); 8]; 3];
+        for (l, p) in lanes.enumerate() {
+            at[0][l] = s.packed.get_unchecked(p.i as usize).0.as_ptr();
+            at[1][l] = s.packed.get_unchecked(p.j as usize).0.as_ptr();
+            at[2][l] = p as *const Pair as *const f64;
+        }
+        at
     }
 
     /// Lanes that load 32-byte rows and transpose them ([`lane_inputs`]).
@@ -776,20 +786,11 @@ mod simd {
         s: Particles,
     ) -> PairIn<L> {
         let n = ks.len();
-        let (mut pi, mut pj, mut pp, mut ph) = (
-            [std::ptr::null(); 8],
-            [std::ptr::null(); 8],
-            [std::ptr::null(); 8],
-            [std::ptr::null(); 8],
-        );
-        for l in 0..n {
-            let k = *ks.get_unchecked(l) as usize;
-            let p = pairs.get_unchecked(k);
-            pi[l] = s.packed.get_unchecked(p.i as usize).0.as_ptr();
-            pj[l] = s.packed.get_unchecked(p.j as usize).0.as_ptr();
-            pp[l] = p as *const Pair as *const f64;
-            ph[l] = hist.get_unchecked(k) as *const ContactHistory as *const f64;
-        }
+        let [pi, pj, pp] = record_ptrs(ks.iter().map(|&k| &pairs[k as usize]), s);
+        let ph: [*const f64; 8] = std::array::from_fn(|l| match ks.get(l) {
+            Some(&k) => &hist[k as usize] as *const ContactHistory as *const f64,
+            None => std::ptr::null(),
+        });
         let at = |base: &[*const f64; 8], off: usize| -> [*const f64; 8] {
             std::array::from_fn(|l| base[l].wrapping_add(off))
         };
