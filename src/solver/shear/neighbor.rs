@@ -21,7 +21,7 @@ use crate::solver::team::{bounds, Team};
 /// native pair that copy, operation for operation, so its history is the one LIGGGHTS dumps.
 /// 32 bytes: what the pair pass reads for every listed pair to decide whether it touches
 /// (the history, read only for touching pairs, is kept beside it in [`NeighborList::hist`]).
-/// `repr(C)`: the AVX-512 pass loads a pair as 32 bytes `[i j | shift]` ([`super::pairs`]).
+/// `repr(C)`: the SIMD passes load a pair as 32 bytes `[i j | shift]` ([`super::pairs`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[repr(C)]
 pub struct Pair {
