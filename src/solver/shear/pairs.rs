@@ -705,15 +705,14 @@ mod simd {
     use crate::solver::material::PairParams;
     use std::arch::x86_64::*;
 
-    /// The outputs of 8 lanes as arrays (lane `l` of component `c` at `[c][l]`) and the
-    /// masks as bits (lane `l` at bit `l`).
+    /// The outputs of 8 lanes: the increments and histories as rows (lane `l` at `[l]`:
+    /// `di` `[f | torque | 0 0]` of `i`, `dj` of `j`, `hist` `[shear | r_torque | 0 0]`),
+    /// the dashpot as arrays (lane `l` of component `c` at `[c][l]`), the masks as bits
+    /// (lane `l` at bit `l`).
     pub(super) struct Out8 {
-        fi: [[f64; 8]; 3],
-        ti: [[f64; 8]; 3],
-        fj: [[f64; 8]; 3],
-        tj: [[f64; 8]; 3],
-        shear: [[f64; 8]; 3],
-        r_torque: [[f64; 8]; 3],
+        di: [[f64; 8]; 8],
+        dj: [[f64; 8]; 8],
+        hist: [[f64; 8]; 8],
         en: [[f64; 8]; 3],
         damping: [f64; 8],
         touch: u8,
@@ -900,6 +899,59 @@ mod simd {
         ]
     }
 
+    /// Two vectors of 3 components (`a`, `b`) of 8 lanes as 8 rows `[a0 a1 a2 b0 b1 b2 0 0]`
+    /// (row `l`: lane `l`), an 8x8 transpose with two zero vectors: 6 unpacks, 8 two-source
+    /// permutes and 8 128-bit-block shuffles. A row is then one particle's increment
+    /// ([`ForceData`]: force, torque) or one history ([`ContactHistory`]: shear, rolling
+    /// torque), read whole by the write-back instead of 6 scalars from 6 lane arrays.
+    #[inline(always)]
+    unsafe fn rows6x8(a: [F8; 3], b: [F8; 3]) -> [[f64; 8]; 8] {
+        let v = [a[0].0, a[1].0, a[2].0, b[0].0, b[1].0, b[2].0];
+        let z = _mm512_setzero_pd();
+        // t0 = [v0.0 v1.0 v0.2 v1.2 v0.4 v1.4 v0.6 v1.6], t1 the odd elements; likewise
+        // (v2, v3) and (v4, v5); (v6, v7) are zero
+        let t = [
+            _mm512_unpacklo_pd(v[0], v[1]),
+            _mm512_unpackhi_pd(v[0], v[1]),
+            _mm512_unpacklo_pd(v[2], v[3]),
+            _mm512_unpackhi_pd(v[2], v[3]),
+            _mm512_unpacklo_pd(v[4], v[5]),
+            _mm512_unpackhi_pd(v[4], v[5]),
+        ];
+        // u0 = [v0.0 v1.0 v2.0 v3.0 v0.4 v1.4 v2.4 v3.4] (elements 0 and 4 of v0-v3), u1
+        // elements 1 and 5, u2 2 and 6, u3 3 and 7; u4-u7 the same of v4-v7
+        let ev = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+        let od = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+        let u = [
+            _mm512_permutex2var_pd(t[0], ev, t[2]),
+            _mm512_permutex2var_pd(t[1], ev, t[3]),
+            _mm512_permutex2var_pd(t[0], od, t[2]),
+            _mm512_permutex2var_pd(t[1], od, t[3]),
+            _mm512_permutex2var_pd(t[4], ev, z),
+            _mm512_permutex2var_pd(t[5], ev, z),
+            _mm512_permutex2var_pd(t[4], od, z),
+            _mm512_permutex2var_pd(t[5], od, z),
+        ];
+        // row r < 4: the low halves of u[r] and u[r + 4]; row r + 4 the high halves
+        let lo = |k: usize| _mm512_shuffle_f64x2::<0b01_00_01_00>(u[k], u[k + 4]);
+        let hi = |k: usize| _mm512_shuffle_f64x2::<0b11_10_11_10>(u[k], u[k + 4]);
+        let rows = [lo(0), lo(1), lo(2), lo(3), hi(0), hi(1), hi(2), hi(3)];
+        rows.map(|r| F8(r).to_array())
+    }
+
+    /// [`rows6x8`] for 4 lanes: rows `[a0 a1 a2 b0 b1 b2 0 0]` into `dst` (4 rows), two 4x4
+    /// transposes.
+    #[inline(always)]
+    unsafe fn rows6x4(dst: &mut [[f64; 8]], a: [F4; 3], b: [F4; 3]) {
+        let z = _mm256_setzero_pd();
+        let front = transpose4x4([a[0].0, a[1].0, a[2].0, b[0].0]);
+        let back = transpose4x4([b[1].0, b[2].0, z, z]);
+        for (l, row) in dst.iter_mut().enumerate().take(4) {
+            front[l].store(&mut row[..4]);
+            back[l].store(&mut row[4..]);
+        }
+    }
+
     /// AVX-512: the 8 lanes in one vector.
     pub(super) struct Avx512;
     /// AVX2: the 8 lanes as two vectors of 4, lanes 0-3 then 4-7.
@@ -924,12 +976,9 @@ mod simd {
             let o = batch::pair(&inp, params, update_history);
             let arr = |v: [F8; 3]| [v[0].to_array(), v[1].to_array(), v[2].to_array()];
             Out8 {
-                fi: arr(o.fi),
-                ti: arr(o.ti),
-                fj: arr(o.fj),
-                tj: arr(o.tj),
-                shear: arr(o.shear),
-                r_torque: arr(o.r_torque),
+                di: rows6x8(o.fi, o.ti),
+                dj: rows6x8(o.fj, o.tj),
+                hist: rows6x8(o.shear, o.r_torque),
                 en: arr(o.en),
                 damping: o.damping.to_array(),
                 touch: o.touch.bits(),
@@ -955,12 +1004,9 @@ mod simd {
             update_history: bool,
         ) -> Out8 {
             let mut r = Out8 {
-                fi: [[0.0; 8]; 3],
-                ti: [[0.0; 8]; 3],
-                fj: [[0.0; 8]; 3],
-                tj: [[0.0; 8]; 3],
-                shear: [[0.0; 8]; 3],
-                r_torque: [[0.0; 8]; 3],
+                di: [[0.0; 8]; 8],
+                dj: [[0.0; 8]; 8],
+                hist: [[0.0; 8]; 8],
                 en: [[0.0; 8]; 3],
                 damping: [0.0; 8],
                 touch: 0,
@@ -975,12 +1021,9 @@ mod simd {
                         v[c].store(&mut dst[c][half..half + 4]);
                     }
                 };
-                put(&mut r.fi, o.fi);
-                put(&mut r.ti, o.ti);
-                put(&mut r.fj, o.fj);
-                put(&mut r.tj, o.tj);
-                put(&mut r.shear, o.shear);
-                put(&mut r.r_torque, o.r_torque);
+                rows6x4(&mut r.di[half..half + 4], o.fi, o.ti);
+                rows6x4(&mut r.dj[half..half + 4], o.fj, o.tj);
+                rows6x4(&mut r.hist[half..half + 4], o.shear, o.r_torque);
                 put(&mut r.en, o.en);
                 o.damping.store(&mut r.damping[half..half + 4]);
                 r.touch |= o.touch.bits() << half;
@@ -1135,24 +1178,22 @@ mod simd {
             // lanes beyond `count` hold earlier or zero indices of this chunk: valid pairs,
             // computed and not written back
             let ks = &touching[t0..t0 + 8];
-            let o = E::eval8(ks, pairs, hist, s, params, update_history);
-            let (fi, ti, fj, tj) = (&o.fi, &o.ti, &o.fj, &o.tj);
-            let (sh, rt, en) = (&o.shear, &o.r_torque, &o.en);
-            let damping = o.damping;
-            let (touch, mob, slide) = (o.touch, o.mobilised, o.sliding);
+            let rows = E::eval8(ks, pairs, hist, s, params, update_history);
+            let en = &rows.en;
+            let damping = rows.damping;
+            let (touch, mob, slide) = (rows.touch, rows.mobilised, rows.sliding);
             for (l, &k) in ks[..count].iter().enumerate() {
                 let k = k as usize;
                 let at = |a: &[[f64; 8]; 3]| [a[0][l], a[1][l], a[2][l]];
-                let (di, dj) = (
+                let row = |r: &[f64; 8]| ([r[0], r[1], r[2]], [r[3], r[4], r[5]]);
+                let force = |r: &[f64; 8]| {
+                    let (delta_f, delta_torque) = row(r);
                     ForceData {
-                        delta_f: at(fi),
-                        delta_torque: at(ti),
-                    },
-                    ForceData {
-                        delta_f: at(fj),
-                        delta_torque: at(tj),
-                    },
-                );
+                        delta_f,
+                        delta_torque,
+                    }
+                };
+                let (di, dj) = (force(&rows.di[l]), force(&rows.dj[l]));
                 let p = pairs.get_unchecked(k);
                 let o = if held { Some(&mut out[k]) } else { None };
                 sink.deliver(p.i as usize, p.j as usize, &di, &dj, o, out_apart);
@@ -1173,10 +1214,8 @@ mod simd {
                     };
                 }
                 if update_history {
-                    *hist.get_unchecked_mut(k) = ContactHistory {
-                        shear: at(sh),
-                        r_torque: at(rt),
-                    };
+                    let (shear, r_torque) = row(&rows.hist[l]);
+                    *hist.get_unchecked_mut(k) = ContactHistory { shear, r_torque };
                 }
             }
             t0 += count;
