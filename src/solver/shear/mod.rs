@@ -431,10 +431,11 @@ impl ShearSim {
         } else if self.packed.len() != n {
             self.pack_all(&team);
         }
-        let (kick, f, torque) = (&self.kick, &self.f, &self.torque);
-        let (xhold, skin) = (&self.xhold, self.case.skin);
+        let (kick, f, torque) = (&self.kick[..], &self.f[..], &self.torque[..]);
+        let (xhold, skin) = (&self.xhold[..], self.case.skin);
         // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
-        // (some atom moved more than skin/2 since the last build)
+        // (some atom moved more than skin/2 since the last build); each share's inputs as
+        // slices of its own (no bounds check or reload of an array's address per particle)
         let parts: Vec<_> = split_mut(&mut self.x, th)
             .into_iter()
             .zip(split_mut(&mut self.v, th))
@@ -444,17 +445,30 @@ impl ShearSim {
             .collect();
         let moved = team
             .map(parts, |t, ((((x, v), w), rot), packed)| {
-                let o = bounds(n, th, t).start;
+                let r = bounds(n, th, t);
+                let (f, torque, kick, xhold) = (
+                    &f[r.clone()],
+                    &torque[r.clone()],
+                    &kick[r.clone()],
+                    &xhold[r],
+                );
                 let mut moved = false;
-                for k in 0..x.len() {
-                    let i = o + k;
-                    nve.initial_kicked(&mut x[k], &mut v[k], &mut w[k], f[i], torque[i], kick[i]);
+                let inputs = f.iter().zip(torque).zip(kick).zip(xhold);
+                let states = x
+                    .iter_mut()
+                    .zip(v.iter_mut())
+                    .zip(w.iter_mut())
+                    .zip(rot.iter_mut());
+                for (k, ((((f, tq), kick), hold), (((x, v), w), rot))) in
+                    inputs.zip(states).enumerate()
+                {
+                    nve.initial_kicked(x, v, w, *f, *tq, *kick);
                     for c in 0..3 {
-                        rot[k][c] += w[k][c] * dt;
+                        rot[c] += w[c] * dt;
                     }
-                    moved |= moved_beyond_half_skin(x[k], xhold[i], skin);
-                    if pack {
-                        packed[k].moved(x[k], v[k], w[k]);
+                    moved |= moved_beyond_half_skin(*x, *hold, skin);
+                    if let Some(p) = packed.get_mut(k) {
+                        p.moved(*x, *v, *w);
                     }
                 }
                 moved
@@ -488,10 +502,10 @@ impl ShearSim {
                 .zip(split_mut(&mut self.omega, th))
                 .collect();
             team.each(parts, |t, (v, w)| {
-                let o = bounds(n, th, t).start;
-                for k in 0..v.len() {
-                    let i = o + k;
-                    nve.finish_kicked(&mut v[k], &mut w[k], f[i], torque[i], kick[i]);
+                let r = bounds(n, th, t);
+                let inputs = f[r.clone()].iter().zip(&torque[r.clone()]).zip(&kick[r]);
+                for (((f, tq), kick), (v, w)) in inputs.zip(v.iter_mut().zip(w.iter_mut())) {
+                    nve.finish_kicked(v, w, *f, *tq, *kick);
                 }
             });
         }
