@@ -717,3 +717,82 @@ fn max_kernel_variable_caps_the_paths_and_refuses_bad_values() {
         "{text}"
     );
 }
+
+/// `verify bench --rounds 2` runs both codes twice, in rounds, and reports the median of the
+/// rounds' ratios (of two, their mean) besides each round's; 0 rounds is refused naming the
+/// option and its range.
+#[test]
+fn bench_rounds_report_the_median_of_the_rounds_ratios() {
+    let o = verify(&["bench", "--native-only", "--rounds", "0"]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::text(&o));
+    assert!(
+        stderr(&o).contains("--rounds") && stderr(&o).contains("1 to 50"),
+        "{}",
+        common::text(&o)
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = verify(&[
+        "bench",
+        "--preset",
+        "ci",
+        "--steps",
+        "20",
+        "--compression-steps",
+        "200",
+        "--threads",
+        "1,2",
+        "--procs",
+        "1",
+        "--kernels",
+        "scalar",
+        "--rounds",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let text = common::text(&o);
+    assert!(
+        text.contains("round 2 of 2") && text.contains("median of 2 rounds"),
+        "{text}"
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let runs: Vec<(String, u64, u64)> = r["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| {
+            (
+                x["code"].as_str().unwrap().to_string(),
+                x["workers"].as_u64().unwrap(),
+                x["round"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let want: Vec<(String, u64, u64)> = (0..2)
+        .flat_map(|k| {
+            [("native", 1), ("native", 2), ("liggghts", 1)].map(|(c, w)| (c.to_string(), w, k))
+        })
+        .collect();
+    assert_eq!(runs, want);
+    for (median, rounds) in [
+        ("native_vs_liggghts_1", "rounds_native_vs_liggghts_1"),
+        ("native_2_vs_1", "rounds_native_2_vs_1"),
+    ] {
+        let each: Vec<f64> = r[rounds]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(each.len(), 2, "{rounds}");
+        assert!(each.iter().all(|x| x.is_finite() && *x > 0.0), "{each:?}");
+        let m = r[median].as_f64().unwrap();
+        assert!(
+            (m - 0.5 * (each[0] + each[1])).abs() <= 1e-12 * m,
+            "{median} {m} {each:?}"
+        );
+    }
+}

@@ -52,6 +52,10 @@ pub struct BenchArgs {
     /// Skip LIGGGHTS (native only).
     #[arg(long)]
     pub native_only: bool,
+    /// Rounds of every native and every LIGGGHTS run (in that order); the ratios are the
+    /// medians of the rounds' ratios, robust to a machine whose speed drifts.
+    #[arg(long, default_value_t = 1)]
+    pub rounds: usize,
     #[command(flatten)]
     pub liggghts: LiggghtsArgs,
     /// Output directory (default: a new directory under ./runs/).
@@ -74,6 +78,7 @@ pub fn bench(a: BenchArgs) -> Result<Verdict> {
         particles: a.particles,
         compression_steps: a.compression_steps,
         liggghts: (!a.native_only).then(|| a.liggghts.request(SHEAR_TIMEOUT_S)),
+        rounds: a.rounds,
         out: out_or_default(a.out.as_deref(), "bench"),
     };
     run(&req)?;

@@ -36,12 +36,27 @@ pub struct BenchRequest {
     pub compression_steps: u64,
     /// LIGGGHTS (None: native only).
     pub liggghts: Option<LiggghtsRequest>,
+    /// Rounds of every native and every LIGGGHTS run, in that order: the ratios are the
+    /// medians of the rounds' ratios (a round's two codes run a minute apart, so a machine
+    /// whose speed drifts affects both alike), the rates the medians of the rounds' rates.
+    #[serde(default = "one_round")]
+    pub rounds: usize,
     pub out: PathBuf,
 }
+
+fn one_round() -> usize {
+    1
+}
+
+/// The most rounds one bench makes.
+pub const MAX_ROUNDS: usize = 50;
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BenchRow {
     pub code: String,
+    /// The round this run belongs to (0 to [`BenchRequest::rounds`] - 1).
+    #[serde(default)]
+    pub round: usize,
     /// Threads (native) or MPI processes (LIGGGHTS).
     pub workers: usize,
     pub particles: usize,
@@ -72,10 +87,18 @@ pub struct BenchReport {
     pub rolling: RollingModel,
     pub particles: usize,
     pub rows: Vec<BenchRow>,
-    /// native 1 thread / LIGGGHTS 1 process (the fastest kernel path measured).
+    /// native 1 thread / LIGGGHTS 1 process (the fastest kernel path measured): the median
+    /// of the rounds' ratios.
     pub native_vs_liggghts_1: Option<f64>,
-    /// native 2 threads / native 1 thread (the fastest kernel path measured).
+    /// native 2 threads / native 1 thread (the fastest kernel path measured): the median of
+    /// the rounds' ratios.
     pub native_2_vs_1: Option<f64>,
+    /// Each round's native 1 thread / LIGGGHTS 1 process.
+    #[serde(default)]
+    pub rounds_native_vs_liggghts_1: Vec<f64>,
+    /// Each round's native 2 threads / native 1 thread.
+    #[serde(default)]
+    pub rounds_native_2_vs_1: Vec<f64>,
     /// The kernel path the ratios above use.
     #[serde(default)]
     pub kernel: Option<KernelPath>,
@@ -88,7 +111,8 @@ pub struct BenchReport {
     /// particle].
     #[serde(default)]
     pub native_held_per_particle: Vec<(String, f64)>,
-    /// Estimated wall time of one full `paper` run (3 stages) per code [hours].
+    /// Estimated wall time of one full `paper` run (3 stages) per code [hours], from the
+    /// median rate of its rounds.
     pub paper_run_hours: Vec<(String, f64)>,
     pub date_utc: String,
 }
@@ -125,6 +149,17 @@ fn process_cpu_seconds() -> Option<f64> {
     let utime: f64 = f.get(11)?.parse().ok()?;
     let stime: f64 = f.get(12)?.parse().ok()?;
     Some((utime + stime) / 100.0)
+}
+
+/// The median of `v` (the mean of the two middle values of an even count); None if empty.
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
+    }
 }
 
 /// Tiles a sample k x k times in x and z.
@@ -171,6 +206,13 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     }
     if a.threads.contains(&0) || a.procs.contains(&0) {
         return Err(Error::invalid("--threads/--procs", 0, ">= 1"));
+    }
+    if a.rounds == 0 || a.rounds > MAX_ROUNDS {
+        return Err(Error::invalid(
+            "--rounds",
+            a.rounds,
+            format!("1 to {MAX_ROUNDS}"),
+        ));
     }
     if a.kernels.is_empty() {
         return Err(Error::invalid(
@@ -223,97 +265,102 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let mut rows = Vec::new();
     let mut rss_native = None;
     let mut held_native: Vec<(String, f64)> = Vec::new();
-    for &kernel in &a.kernels {
-        for &t in &a.threads {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-            type Timed = (
-                f64,
-                Option<f64>,
-                Option<PhaseTimes>,
-                (usize, usize, usize),
-                Vec<(&'static str, usize)>,
-                (usize, usize),
-            );
-            // the solver's own peak: from the resident set just before it is made (the input
-            // state and the compaction's leftovers excluded)
-            let before = if rss_native.is_none() {
-                reset_peak_rss()
-            } else {
-                None
-            };
-            let (secs, cpu, phases, counts, held, cand) = pool.install(|| -> Result<Timed> {
-                let mut s = ShearSim::new(&c, &state);
-                s.set_kernel(kernel)?;
-                s.setup(0.0)?;
-                s.step()?;
-                s.setup(speed)?;
-                for _ in 0..steps[0] {
-                    s.step()?;
-                }
-                s.setup(speed)?;
-                s.time_phases(true);
-                let (t0, c0) = (Instant::now(), process_cpu_seconds());
-                for _ in 0..steps[1] {
-                    s.step()?;
-                }
-                let el = t0.elapsed().as_secs_f64();
-                let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
-                s.check_finite()?;
-                Ok((
-                    el,
-                    cpu,
-                    s.phase_times(),
-                    s.contact_counts(),
-                    s.memory(),
-                    s.plate_candidates(),
-                ))
-            })?;
-            if rss_native.is_none() {
-                held_native = held
-                    .iter()
-                    .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
-                    .collect();
-                rss_native = match (before, peak_rss()) {
-                    (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
-                    _ => {
-                        println!(
-                            "  (the peak resident set cannot be reset here: the memory figure \
-                             counts the input state and the compaction too)"
-                        );
-                        rss0.zip(peak_rss()).map(|(a0, a1)| (a1 - a0) / n as f64)
-                    }
+    for round in 0..a.rounds {
+        if a.rounds > 1 {
+            println!("  round {} of {}", round + 1, a.rounds);
+        }
+        for &kernel in &a.kernels {
+            for &t in &a.threads {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
+                type Timed = (
+                    f64,
+                    Option<f64>,
+                    Option<PhaseTimes>,
+                    (usize, usize, usize),
+                    Vec<(&'static str, usize)>,
+                    (usize, usize),
+                );
+                // the solver's own peak: from the resident set just before it is made (the input
+                // state and the compaction's leftovers excluded)
+                let before = if rss_native.is_none() {
+                    reset_peak_rss()
+                } else {
+                    None
                 };
-            }
-            let r = steps[1] as f64 * n as f64 / secs;
-            println!(
-                "  native   {t} thread(s), {} kernel: {secs:8.2} s  {r:.3e} particle-steps/s  \
+                let (secs, cpu, phases, counts, held, cand) =
+                    pool.install(|| -> Result<Timed> {
+                        let mut s = ShearSim::new(&c, &state);
+                        s.set_kernel(kernel)?;
+                        s.setup(0.0)?;
+                        s.step()?;
+                        s.setup(speed)?;
+                        for _ in 0..steps[0] {
+                            s.step()?;
+                        }
+                        s.setup(speed)?;
+                        s.time_phases(true);
+                        let (t0, c0) = (Instant::now(), process_cpu_seconds());
+                        for _ in 0..steps[1] {
+                            s.step()?;
+                        }
+                        let el = t0.elapsed().as_secs_f64();
+                        let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
+                        s.check_finite()?;
+                        Ok((
+                            el,
+                            cpu,
+                            s.phase_times(),
+                            s.contact_counts(),
+                            s.memory(),
+                            s.plate_candidates(),
+                        ))
+                    })?;
+                if rss_native.is_none() {
+                    held_native = held
+                        .iter()
+                        .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
+                        .collect();
+                    rss_native = match (before, peak_rss()) {
+                        (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
+                        _ => {
+                            println!(
+                                "  (the peak resident set cannot be reset here: the memory figure \
+                             counts the input state and the compaction too)"
+                            );
+                            rss0.zip(peak_rss()).map(|(a0, a1)| (a1 - a0) / n as f64)
+                        }
+                    };
+                }
+                let r = steps[1] as f64 * n as f64 / secs;
+                println!(
+                    "  native   {t} thread(s), {} kernel: {secs:8.2} s  {r:.3e} particle-steps/s  \
                  ({:.3e} per core; CPU {})",
-                kernel.name(),
-                r / t as f64,
-                cpu.map(|c| format!(
-                    "{c:.2} s, {:.3e} particle-steps per CPU-second",
-                    steps[1] as f64 * n as f64 / c
-                ))
-                .unwrap_or_else(|| "time not available".into())
-            );
-            if let Some(ph) = &phases {
-                let per = 1e9 / (steps[1] as f64 * n as f64);
-                let parts: Vec<String> = ph
-                    .named()
-                    .iter()
-                    .map(|(name, sec)| format!("{name} {:.1}", sec * per))
-                    .collect();
-                println!("           ns per particle-step: {}", parts.join(", "));
-            }
-            let per_particle = (
-                counts.0 as f64 / n as f64,
-                counts.1 as f64 / n as f64,
-                counts.2 as f64 / n as f64,
-            );
-            println!(
+                    kernel.name(),
+                    r / t as f64,
+                    cpu.map(|c| format!(
+                        "{c:.2} s, {:.3e} particle-steps per CPU-second",
+                        steps[1] as f64 * n as f64 / c
+                    ))
+                    .unwrap_or_else(|| "time not available".into())
+                );
+                if let Some(ph) = &phases {
+                    let per = 1e9 / (steps[1] as f64 * n as f64);
+                    let parts: Vec<String> = ph
+                        .named()
+                        .iter()
+                        .map(|(name, sec)| format!("{name} {:.1}", sec * per))
+                        .collect();
+                    println!("           ns per particle-step: {}", parts.join(", "));
+                }
+                let per_particle = (
+                    counts.0 as f64 / n as f64,
+                    counts.1 as f64 / n as f64,
+                    counts.2 as f64 / n as f64,
+                );
+                println!(
                 "           per particle: {:.2} listed pairs, {:.2} touching pairs, {:.3} plate \
                  contacts; {:.1} % of the particles test {:.1} plate triangles each",
                 per_particle.0,
@@ -322,72 +369,104 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 100.0 * cand.0 as f64 / n as f64,
                 cand.1 as f64 / cand.0.max(1) as f64
             );
-            rows.push(BenchRow {
-                code: "native".into(),
-                workers: t,
-                particles: n,
-                steps: steps[1],
-                seconds: secs,
-                cpu_seconds: cpu,
-                particle_steps_per_s: r,
-                per_core: r / t as f64,
-                kernel: Some(kernel),
-                phases,
-                per_particle: Some(per_particle),
-            });
-        }
-    }
-    if let Some(lr) = &a.liggghts {
-        for &p in &a.procs {
-            let mut lig = lr.locate()?;
-            if p > 1 {
-                lig.mpi_procs = Some(p);
+                rows.push(BenchRow {
+                    code: "native".into(),
+                    round,
+                    workers: t,
+                    particles: n,
+                    steps: steps[1],
+                    seconds: secs,
+                    cpu_seconds: cpu,
+                    particle_steps_per_s: r,
+                    per_core: r / t as f64,
+                    kernel: Some(kernel),
+                    phases,
+                    per_particle: Some(per_particle),
+                });
             }
-            let dir = out.join(format!("liggghts_np{p}"));
-            std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-            lig.run(&crate::deck::shear::shear_deck(&c, &state), &dir)?;
-            let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
-            let r = st as f64 * n as f64 / secs;
-            println!("  LIGGGHTS {p} process(es): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)", r / p as f64);
-            rows.push(BenchRow {
-                code: "liggghts".into(),
-                workers: p,
-                particles: n,
-                steps: st,
-                seconds: secs,
-                cpu_seconds: None,
-                particle_steps_per_s: r,
-                per_core: r / p as f64,
-                kernel: None,
-                phases: None,
-                per_particle: None,
-            });
+        }
+        if let Some(lr) = &a.liggghts {
+            for &p in &a.procs {
+                let mut lig = lr.locate()?;
+                if p > 1 {
+                    lig.mpi_procs = Some(p);
+                }
+                let dir = out.join(format!("liggghts_np{p}"));
+                std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+                lig.run(&crate::deck::shear::shear_deck(&c, &state), &dir)?;
+                let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
+                let r = st as f64 * n as f64 / secs;
+                println!("  LIGGGHTS {p} process(es): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)", r / p as f64);
+                rows.push(BenchRow {
+                    code: "liggghts".into(),
+                    round,
+                    workers: p,
+                    particles: n,
+                    steps: st,
+                    seconds: secs,
+                    cpu_seconds: None,
+                    particle_steps_per_s: r,
+                    per_core: r / p as f64,
+                    kernel: None,
+                    phases: None,
+                    per_particle: None,
+                });
+            }
         }
     }
-    // the ratios use the fastest kernel path measured with one thread
-    let kernel = rows
+    // a configuration's rate: the median of its rounds
+    let rate = |code: &str, w: usize, k: Option<KernelPath>| {
+        median(
+            rows.iter()
+                .filter(|r| r.code == code && r.workers == w && r.kernel == k)
+                .map(|r| r.particle_steps_per_s)
+                .collect(),
+        )
+    };
+    // the ratios use the fastest kernel path measured with one thread (median rates)
+    let kernel = a
+        .kernels
         .iter()
-        .filter(|r| r.code == "native" && r.workers == 1)
-        .max_by(|a, b| a.particle_steps_per_s.total_cmp(&b.particle_steps_per_s))
-        .and_then(|r| r.kernel);
-    let get = |code: &str, w: usize| {
+        .filter_map(|&k| rate("native", 1, Some(k)).map(|r| (k, r)))
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .map(|(k, _)| k);
+    let in_round = |code: &str, w: usize, round: usize| {
         rows.iter()
-            .find(|r| r.code == code && r.workers == w && (code != "native" || r.kernel == kernel))
+            .find(|r| {
+                r.code == code
+                    && r.workers == w
+                    && r.round == round
+                    && (code != "native" || r.kernel == kernel)
+            })
             .map(|r| r.particle_steps_per_s)
     };
-    let native_vs_liggghts_1 = get("native", 1).zip(get("liggghts", 1)).map(|(a, b)| a / b);
-    let native_2_vs_1 = get("native", 2).zip(get("native", 1)).map(|(a, b)| a / b);
+    let per_round = |num: (&str, usize), den: (&str, usize)| -> Vec<f64> {
+        (0..a.rounds)
+            .filter_map(|k| {
+                in_round(num.0, num.1, k)
+                    .zip(in_round(den.0, den.1, k))
+                    .map(|(x, y)| x / y)
+            })
+            .collect()
+    };
+    let rounds_native_vs_liggghts_1 = per_round(("native", 1), ("liggghts", 1));
+    let rounds_native_2_vs_1 = per_round(("native", 2), ("native", 1));
+    let native_vs_liggghts_1 = median(rounds_native_vs_liggghts_1.clone());
+    let native_2_vs_1 = median(rounds_native_2_vs_1.clone());
     // one paper run: 2500 particles, the paper preset's steps
     let paper = ShearCase::preset(Preset::Paper, RollingModel::Epsd, 0.5, 0.5, 1)?;
     let paper_ps = paper.total_steps() as f64 * paper.particles as f64;
     let mut paper_run_hours = Vec::new();
-    for r in &rows {
+    for r in rows.iter().filter(|r| r.round == 0) {
+        let Some(median_rate) = rate(&r.code, r.workers, r.kernel) else {
+            continue;
+        };
         paper_run_hours.push((
             match r.kernel {
                 Some(k) => format!("{} x{} ({})", r.code, r.workers, k.name()),
                 None => format!("{} x{}", r.code, r.workers),
             },
-            paper_ps / r.particle_steps_per_s / 3600.0,
+            paper_ps / median_rate / 3600.0,
         ));
     }
     let report = BenchReport {
@@ -398,17 +477,32 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         rows,
         native_vs_liggghts_1,
         native_2_vs_1,
+        rounds_native_vs_liggghts_1,
+        rounds_native_2_vs_1,
         kernel,
         native_bytes_per_particle: rss_native,
         native_held_per_particle: held_native.clone(),
         paper_run_hours,
         date_utc: utc_stamp(),
     };
+    let rounds = |v: &[f64]| match v.len() {
+        0 | 1 => String::new(),
+        _ => {
+            let each: Vec<String> = v.iter().map(|x| format!("{x:.2}")).collect();
+            format!(" (median of {} rounds: {})", v.len(), each.join(", "))
+        }
+    };
     if let Some(x) = native_vs_liggghts_1 {
-        println!("  native 1 thread / LIGGGHTS 1 process = {x:.2}");
+        println!(
+            "  native 1 thread / LIGGGHTS 1 process = {x:.2}{}",
+            rounds(&report.rounds_native_vs_liggghts_1)
+        );
     }
     if let Some(x) = native_2_vs_1 {
-        println!("  native 2 threads / native 1 thread = {x:.2}");
+        println!(
+            "  native 2 threads / native 1 thread = {x:.2}{}",
+            rounds(&report.rounds_native_2_vs_1)
+        );
     }
     if let Some(b) = rss_native {
         println!("  native memory: {b:.0} bytes per particle (peak RSS growth of the solver)");
