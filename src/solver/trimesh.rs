@@ -17,7 +17,7 @@
 //!   this step, else it starts with the history of a coplanar node-neighbour's contact, if any.
 
 use super::mesh::Triangle;
-use super::vec3::{dot, point_distance, sub, V3};
+use super::vec3::{cross, dot, point_distance, sub, V3};
 
 /// `EPSILON_CURVATURE`: normals with |n_a . n_b| > 1 - 1e-5 are coplanar.
 pub const CURVATURE: f64 = 1.0 - 0.00001;
@@ -283,6 +283,26 @@ impl TriMesh {
         dot(tri.normal, node0_to_p).abs() > r * (1.0 + 1e-9)
     }
 
+    /// Whether a sphere (centre `p`, radius `r`) is certainly out of contact with triangle `t`
+    /// at image shift `s` because its centre lies more than `r` outside one of the
+    /// triangle's edges, in the triangle's plane: every point of the triangle is then
+    /// farther than `r`. The distance [`Self::resolve`] finds is never smaller than the
+    /// distance to the triangle, except that a centre whose projection lies outside an edge
+    /// by less than about [`PRECISION`] still counts as a face contact (its barycentric
+    /// tolerance): the margin, `2 PRECISION` and 1e-9 relative, covers that and the
+    /// rounding of the edge normal. Such a sphere would get `d - r > 0` there (or an
+    /// inactive feature) and no contact. No division, unlike `resolve`.
+    pub fn beyond_edges(&self, t: usize, s: V3, p: V3, r: f64) -> bool {
+        let tri = &self.tris[t];
+        let lim = r * (1.0 + 1e-9) + 2.0 * PRECISION;
+        (0..3).any(|k| {
+            // in-plane outward normal of edge k (from node k to node k+1): e_k x n for the
+            // normal e_0 x e_1 (`calcSurfaceNorm`)
+            let out = cross(tri.edge_vec[k], tri.normal);
+            dot(sub(p, shifted(tri.nodes[k], s)), out) > lim
+        })
+    }
+
     /// Sphere (centre `p`, radius `r`) against triangle `t` seen at image shift `s`:
     /// `resolveTriSphereContactBary` for non-obtuse triangles. None when the closest feature
     /// is an inactive edge or corner.
@@ -449,10 +469,10 @@ mod tests {
     /// The plane pre-test never rejects a sphere that `resolve` finds touching: over a grid of
     /// centres around a tent (faces, ridge, valley, images), `beyond_plane` implies no contact.
     #[test]
-    fn plane_pretest_never_drops_a_contact() {
+    fn plane_and_edge_pretests_never_drop_a_contact() {
         let (m, _) = tent();
         let (lx, lz) = (2.0, 1.0);
-        let (mut rejected, mut touching) = (0, 0);
+        let (mut rejected, mut by_edges, mut touching) = (0, 0, 0);
         for ix in 0..41 {
             for iy in 0..21 {
                 for iz in 0..5 {
@@ -469,6 +489,9 @@ mod tests {
                                 if m.beyond_plane(tri, s, p, r) {
                                     rejected += 1;
                                     assert!(hit.is_none(), "{p:?} r {r} tri {tri} {hit:?}");
+                                } else if m.beyond_edges(tri, s, p, r) {
+                                    by_edges += 1;
+                                    assert!(hit.is_none(), "{p:?} r {r} tri {tri} {hit:?}");
                                 }
                             }
                         }
@@ -476,6 +499,39 @@ mod tests {
                 }
             }
         }
-        assert!(rejected > 1000 && touching > 100, "{rejected} {touching}");
+        assert!(
+            rejected > 1000 && by_edges > 1000 && touching > 100,
+            "{rejected} {by_edges} {touching}"
+        );
+    }
+
+    #[test]
+    fn edge_pretest_keeps_the_face_contacts_of_the_barycentric_tolerance() {
+        // centres whose projection lies just outside an edge (within the PRECISION the
+        // barycentric signs allow) touch the face; the pre-test must keep them
+        let (m, h) = tent();
+        let (mut kept, mut faces) = (0, 0);
+        for k in 0..=20 {
+            let x = 0.05 + 0.9 * k as f64 / 20.0;
+            // triangle 0's edge 0 runs along z = 0 from (0, 0) to (1, h): a centre above
+            // the face at z slightly below 0
+            for dz in [-0.9 * PRECISION, -0.4 * PRECISION, 0.0, 1e-12] {
+                let on = [x, x * h, dz];
+                let n = m.tris[0].normal;
+                let r = 0.01;
+                let p = [
+                    on[0] + 0.5 * r * n[0],
+                    on[1] + 0.5 * r * n[1],
+                    on[2] + 0.5 * r * n[2],
+                ];
+                let hit = m.resolve(0, [0.0; 3], p).filter(|h| h.d - r <= 0.0);
+                faces += hit.is_some_and(|h| h.face) as usize;
+                if hit.is_some() {
+                    assert!(!m.beyond_edges(0, [0.0; 3], p, r), "{p:?} {hit:?}");
+                    kept += 1;
+                }
+            }
+        }
+        assert!(kept > 40 && faces > 40, "{kept} {faces}");
     }
 }

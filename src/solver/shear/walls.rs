@@ -96,7 +96,15 @@ impl WallContext<'_> {
                     continue;
                 }
                 let shift = image_shift(img, lx, lz);
-                if mesh.beyond_plane(tri as usize, shift, x[q], radius[q]) {
+                // two exact pre-tests before the barycentric test (which divides): about
+                // 70 % of the candidates lie within r of the triangle's plane, and two
+                // thirds of those then end apart or on an inactive edge (on the fast
+                // state, 1,165 candidates per step). Measured (fast state, avx512,
+                // alternating every 250 steps in one process, 3 runs each): time per step
+                // with the edge pre-test 0.952-0.975x on 1 thread, 0.974-0.986x on 2.
+                if mesh.beyond_plane(tri as usize, shift, x[q], radius[q])
+                    || mesh.beyond_edges(tri as usize, shift, x[q], radius[q])
+                {
                     continue;
                 }
                 let Some(hit) = mesh.resolve(tri as usize, shift, x[q]) else {
