@@ -172,21 +172,33 @@ impl NeighborList {
             let mut cand: Vec<(u32, [f64; 3], bool)> = Vec::new();
             for i in range {
                 let (ix, iy, iz) = (cx(x[i][0]), cy(x[i][1]), cz(x[i][2]));
+                // the z columns of i's neighbour cells (periodic)
+                let mut gzs = [0usize; 3];
+                for (g, &dz) in gzs.iter_mut().zip(zs) {
+                    *g = (iz as isize + dz).rem_euclid(nz as isize) as usize;
+                }
+                let gzs = &gzs[..zs.len()];
                 cand.clear();
                 for &dx in xs {
+                    let gx = (ix as isize + dx).rem_euclid(nx as isize) as usize;
                     for dy in [-1isize, 0, 1] {
                         let gy = iy as isize + dy;
                         if gy < 0 || gy >= ny as isize {
                             continue;
                         }
-                        for &dz in zs {
-                            let gx = (ix as isize + dx).rem_euclid(nx as isize) as usize;
-                            let gz = (iz as isize + dz).rem_euclid(nz as isize) as usize;
-                            let c = (gx * ny + gy as usize) * nz + gz;
-                            for &j in &members[head[c] as usize..head[c + 1] as usize] {
-                                if (j as usize) <= i {
-                                    continue;
-                                }
+                        let column = (gx * ny + gy as usize) * nz;
+                        for &gz in gzs {
+                            let c = column + gz;
+                            let cell = &members[head[c] as usize..head[c + 1] as usize];
+                            // a cell's members are in increasing index (the counting sort
+                            // visits the particles in order): the partners j > i are a
+                            // tail, found without a branch per member on `j <= i` (taken
+                            // about half the time, in no pattern a predictor follows).
+                            // Measured (criterion `neighbor build 2500`, loose packing):
+                            // 1.91 -> 1.57 ms per build, with the cells' z columns found
+                            // once per particle instead of once per cell.
+                            let above = cell.partition_point(|&j| (j as usize) <= i);
+                            for &j in &cell[above..] {
                                 let jj = j as usize;
                                 let mut shift = [0.0; 3];
                                 let mut d =
