@@ -682,7 +682,7 @@ impl ShearSim {
         }
         if fuse {
             self.sum_and_kick(&team, sums, &hits, kick);
-            return self.keep_plate_forces_summed().map(|_| kick);
+            return self.keep_plate_forces_of(&hits).map(|_| kick);
         }
         // per-particle sums in pair order, then plate contacts
         let nl = &self.nl;
@@ -875,6 +875,27 @@ impl ShearSim {
             if self.wall_start[q] == self.wall_start[q + 1] {
                 continue;
             }
+            for c in 0..3 {
+                tb[c] += b[c];
+                tt[c] += t[c];
+            }
+        }
+        self.keep_plate_forces(tb, tt)
+    }
+
+    /// [`Self::keep_plate_forces_summed`] over the particles with a plate contact only,
+    /// from `hits` (each thread's in particle order, the threads' in share order: particle
+    /// order): the others add +0, which changes no bit. Measured on the fast state (2
+    /// threads): the serial sum over every particle cost 2.3-2.7 us per step, 1.3 %.
+    fn keep_plate_forces_of(&mut self, hits: &[Vec<walls::WallHit>]) -> Result<()> {
+        let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
+        let mut last = None;
+        for h in hits.iter().flatten() {
+            if last == Some(h.q) {
+                continue;
+            }
+            last = Some(h.q);
+            let (b, t) = &self.wall_force[h.q as usize];
             for c in 0..3 {
                 tb[c] += b[c];
                 tt[c] += t[c];
