@@ -9,6 +9,7 @@ use crate::solver::team::{bounds, Team};
 
 /// A plate-triangle candidate of a particle: (mesh, triangle, image).
 type WallCand = (u8, u32, u8);
+use crate::solver::trimesh::TriMesh;
 use crate::solver::vec3::V3;
 
 impl ShearSim {
@@ -144,12 +145,34 @@ impl ShearSim {
                     })
             })
             .collect();
+        // per mesh its triangles by the x of their centres, and the largest bounding radius:
+        // a triangle whose centre is farther in x than that + r + skin from the particle's
+        // image fails the bounding-sphere test below, so only a window of triangles is
+        // tested (in increasing index, the order of testing them all: the same candidates
+        // in the same order). The plates are strips across z, their triangles spread along
+        // x: at 250,000 particles (160 triangles per plate) every particle near a plate
+        // tested all 160 at 9 images. Measured at 250,000 (1 thread, 1,000 steps, 20
+        // rebuilds, separate runs): neighbour phase 47.6 -> 44.0 ns per particle-step.
+        let by_x: Vec<(Vec<(f64, u32)>, f64)> = meshes
+            .iter()
+            .map(|m| {
+                let mut v: Vec<(f64, u32)> = m
+                    .center
+                    .iter()
+                    .enumerate()
+                    .map(|(t, c)| (c[0], t as u32))
+                    .collect();
+                v.sort_by(|a, b| a.0.total_cmp(&b.0));
+                (v, m.r_bound.iter().cloned().fold(0.0, f64::max))
+            })
+            .collect();
         // each share's candidates in particle order, with its particles' counts; joined in
         // share order
         let (x, radius) = (&self.x, &self.radius);
         let (th, n) = (team.threads(), x.len());
         let per: Vec<(Vec<WallCand>, Vec<u32>)> = team.map((0..th).collect(), |_, share| {
             let (mut c, mut counts) = (Vec::new(), Vec::with_capacity(bounds(n, th, share).len()));
+            let mut window: Vec<u32> = Vec::new();
             for q in bounds(n, th, share) {
                 let (p, r) = (&x[q], radius[q]);
                 let before = c.len();
@@ -162,20 +185,19 @@ impl ShearSim {
                     {
                         continue;
                     }
+                    let (sorted, rb_max) = &by_x[m];
+                    let half = (rb_max + r + skin) * (1.0 + 1e-9);
                     for img in [4u8, 0, 1, 2, 3, 5, 6, 7, 8] {
                         let s = image_shift(img, lx, lz);
-                        for (t, (cen, rb)) in mesh.center.iter().zip(&mesh.r_bound).enumerate() {
-                            let d = [p[0] - cen[0] - s[0], p[1] - cen[1], p[2] - cen[2] - s[2]];
-                            let reach = rb + r + skin;
-                            // resolveTriSphereNeighbuild: plane distance first, then bounds
-                            let n = mesh.tris[t].normal;
-                            let plane = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).abs();
-                            if plane <= r + skin
-                                && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= reach * reach
-                                && box_distance_sq(p, &mesh.tris[t].nodes, s)
-                                    <= (r + skin) * (r + skin) * (1.0 + 1e-9)
-                            {
-                                c.push((m as u8, t as u32, img));
+                        let x0 = p[0] - s[0];
+                        let lo = sorted.partition_point(|e| e.0 < x0 - half);
+                        let hi = sorted.partition_point(|e| e.0 <= x0 + half);
+                        window.clear();
+                        window.extend(sorted[lo..hi.max(lo)].iter().map(|e| e.1));
+                        window.sort_unstable();
+                        for &t in &window {
+                            if is_candidate(mesh, t as usize, p, r, skin, s) {
+                                c.push((m as u8, t, img));
                             }
                         }
                     }
@@ -211,6 +233,20 @@ impl ShearSim {
     }
 }
 
+/// Whether triangle `t` of `mesh`, shifted by `s`, is a plate candidate of a particle at `p`
+/// of radius `r` (`resolveTriSphereNeighbuild`: plane distance first, then the bounding
+/// sphere, then the triangle's bounding box, each within r + skin).
+fn is_candidate(mesh: &TriMesh, t: usize, p: &V3, r: f64, skin: f64, s: V3) -> bool {
+    let (cen, rb) = (&mesh.center[t], mesh.r_bound[t]);
+    let d = [p[0] - cen[0] - s[0], p[1] - cen[1], p[2] - cen[2] - s[2]];
+    let reach = rb + r + skin;
+    let n = mesh.tris[t].normal;
+    let plane = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]).abs();
+    plane <= r + skin
+        && d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= reach * reach
+        && box_distance_sq(p, &mesh.tris[t].nodes, s) <= (r + skin) * (r + skin) * (1.0 + 1e-9)
+}
+
 /// Squared distance from `p` to the axis-aligned bounding box of a triangle shifted by `s`.
 fn box_distance_sq(p: &V3, nodes: &[V3; 3], s: V3) -> f64 {
     let mut d2 = 0.0;
@@ -232,6 +268,42 @@ fn box_distance_sq(p: &V3, nodes: &[V3; 3], s: V3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::packing::loose_packing;
+    use crate::spec::shear::{Preset, ShearCase};
+    use crate::spec::RollingModel;
+
+    /// The candidates found through the window of triangles by x are those of testing every
+    /// triangle of every mesh at every image, in the same order, with the bottom plate
+    /// moved so that its triangles wrapped across the seam.
+    #[test]
+    fn windowed_plate_candidates_are_every_triangles_in_order() {
+        let case = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+        let pk = loose_packing(&case);
+        let mut sim = ShearSim::new(&case, &pk);
+        let team = Team::new(2);
+        let (lx, lz, skin) = (case.box_x, case.box_z, case.skin);
+        for dx in [0.0, 0.37 * lx, 0.91 * lx] {
+            sim.meshes[0].translate([dx, 0.0, 0.0]);
+            sim.meshes[0].wrap_x(lx);
+            sim.build_wall_candidates(&team);
+            let (mut want, mut start) = (Vec::new(), vec![0u32]);
+            for (p, &r) in sim.x.iter().zip(&sim.radius) {
+                for (m, mesh) in sim.meshes.iter().enumerate() {
+                    for img in [4u8, 0, 1, 2, 3, 5, 6, 7, 8] {
+                        for t in 0..mesh.tris.len() {
+                            if is_candidate(mesh, t, p, r, skin, image_shift(img, lx, lz)) {
+                                want.push((m as u8, t as u32, img));
+                            }
+                        }
+                    }
+                }
+                start.push(want.len() as u32);
+            }
+            assert!(want.len() > 20, "{}", want.len());
+            assert_eq!(sim.wall_cand, want);
+            assert_eq!(sim.wall_start, start);
+        }
+    }
 
     #[test]
     fn box_distance_is_zero_inside_and_a_lower_bound_outside() {
