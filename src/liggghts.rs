@@ -415,6 +415,22 @@ pub fn last_loop_time(log: &Path) -> Result<(f64, u64)> {
         })
 }
 
+/// Neighbour list builds of the last `run` in a LIGGGHTS log: the `Neighbor list builds = N`
+/// line of its statistics (after its `Loop time of` line); None when that run printed none.
+pub fn last_neighbor_builds(log: &Path) -> Result<Option<u64>> {
+    Ok(parse_last_neighbor_builds(&read_to_string(log)?))
+}
+
+fn parse_last_neighbor_builds(text: &str) -> Option<u64> {
+    let (_, last_run) = text.rsplit_once("Loop time of ")?;
+    last_run
+        .lines()
+        .find_map(|l| l.strip_prefix("Neighbor list builds = "))?
+        .trim()
+        .parse()
+        .ok()
+}
+
 /// Kills every descendant of process `pid` (a wrapper script's LIGGGHTS, the ranks under
 /// `mpirun`), deepest first, so a timeout leaves nothing running. The process itself is left
 /// to the caller. The tree is read again until no descendant is left (a dying wrapper may
@@ -458,6 +474,18 @@ pub fn kill_tree(pid: u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn neighbour_builds_are_those_of_the_last_run() {
+        let log = "Loop time of 0.1 on 1 procs for 1 steps\nNeighbor list builds = 0\n\
+                   run 2500\nLoop time of 2.4 on 1 procs for 2500 steps\n\nTotal # of \
+                   neighbors = 12089\nNeighbor list builds = 10\nDangerous builds = 0\n";
+        assert_eq!(parse_last_neighbor_builds(log), Some(10));
+        let unfinished = "Loop time of 0.1 on 1 procs for 1 steps\nNeighbor list builds = 3\n\
+                          Loop time of 2.4 on 1 procs for 2500 steps\n";
+        assert_eq!(parse_last_neighbor_builds(unfinished), None);
+        assert_eq!(parse_last_neighbor_builds("no run here"), None);
+    }
 
     #[test]
     fn thermo_keeps_first_row_of_each_step() {

@@ -777,6 +777,11 @@ fn bench_rounds_report_the_median_of_the_rounds_ratios() {
         })
         .collect();
     assert_eq!(runs, want);
+    // each run's neighbour rebuilds in its timed steps (LIGGGHTS: parsed from its log)
+    for x in r["rows"].as_array().unwrap() {
+        assert!(x["rebuilds"].as_u64().is_some(), "{x}");
+    }
+    assert!(text.contains("neighbour rebuild"), "{text}");
     for (median, rounds) in [
         ("native_vs_liggghts_1", "rounds_native_vs_liggghts_1"),
         ("native_2_vs_1", "rounds_native_2_vs_1"),

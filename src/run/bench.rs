@@ -7,7 +7,7 @@
 use super::{utc_stamp, LiggghtsRequest};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::liggghts::{last_loop_time, LOG_NAME};
+use crate::liggghts::{last_loop_time, last_neighbor_builds, LOG_NAME};
 use crate::packing::{loose_packing, Packing};
 use crate::solver::shear::{compact, KernelPath, PhaseTimes, ShearSim};
 use crate::spec::shear::{Preset, ShearCase, Stage};
@@ -77,6 +77,12 @@ pub struct BenchRow {
     /// per particle.
     #[serde(default)]
     pub per_particle: Option<(f64, f64, f64)>,
+    /// Neighbour list builds during the timed steps (LIGGGHTS: its `Neighbor list builds`
+    /// of the timed run), None where not known: both codes rebuild on the same rule (an
+    /// atom moved more than skin/2), so they should rebuild about equally often, and at
+    /// large particle counts more often than at small ones.
+    #[serde(default)]
+    pub rebuilds: Option<u64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -152,6 +158,17 @@ fn process_cpu_seconds() -> Option<f64> {
 }
 
 /// The median of `v` (the mean of the two middle values of an even count); None if empty.
+/// `N neighbour rebuilds in S steps (every S/N steps)`.
+fn rebuild_line(rebuilds: u64, steps: u64) -> String {
+    match rebuilds {
+        0 => format!("no neighbour rebuild in {steps} steps"),
+        r => format!(
+            "{r} neighbour rebuilds in {steps} steps (every {:.0} steps)",
+            steps as f64 / r as f64
+        ),
+    }
+}
+
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
     let n = v.len();
@@ -282,6 +299,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     (usize, usize, usize),
                     Vec<(&'static str, usize)>,
                     (usize, usize),
+                    u64,
                 );
                 // the solver's own peak: from the resident set just before it is made (the input
                 // state and the compaction's leftovers excluded)
@@ -290,7 +308,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 } else {
                     None
                 };
-                let (secs, cpu, phases, counts, held, cand) =
+                let (secs, cpu, phases, counts, held, cand, rebuilds) =
                     pool.install(|| -> Result<Timed> {
                         let mut s = ShearSim::new(&c, &state);
                         s.set_kernel(kernel)?;
@@ -302,6 +320,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         }
                         s.setup(speed)?;
                         s.time_phases(true);
+                        let builds0 = s.neighbor_builds();
                         let (t0, c0) = (Instant::now(), process_cpu_seconds());
                         for _ in 0..steps[1] {
                             s.step()?;
@@ -316,6 +335,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                             s.contact_counts(),
                             s.memory(),
                             s.plate_candidates(),
+                            s.neighbor_builds() - builds0,
                         ))
                     })?;
                 if rss_native.is_none() {
@@ -369,6 +389,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 100.0 * cand.0 as f64 / n as f64,
                 cand.1 as f64 / cand.0.max(1) as f64
             );
+                println!("           {}", rebuild_line(rebuilds, steps[1]));
                 rows.push(BenchRow {
                     code: "native".into(),
                     round,
@@ -382,6 +403,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     kernel: Some(kernel),
                     phases,
                     per_particle: Some(per_particle),
+                    rebuilds: Some(rebuilds),
                 });
             }
         }
@@ -395,8 +417,12 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
                 lig.run(&crate::deck::shear::shear_deck(&c, &state), &dir)?;
                 let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
+                let rebuilds = last_neighbor_builds(&dir.join(LOG_NAME))?;
                 let r = st as f64 * n as f64 / secs;
                 println!("  LIGGGHTS {p} process(es): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)", r / p as f64);
+                if let Some(b) = rebuilds {
+                    println!("           {}", rebuild_line(b, st));
+                }
                 rows.push(BenchRow {
                     code: "liggghts".into(),
                     round,
@@ -410,6 +436,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     kernel: None,
                     phases: None,
                     per_particle: None,
+                    rebuilds,
                 });
             }
         }
