@@ -145,14 +145,20 @@ impl ShearSim {
                     })
             })
             .collect();
-        // per mesh its triangles by the x of their centres, and the largest bounding radius:
-        // a triangle whose centre is farther in x than that + r + skin from the particle's
-        // image fails the bounding-sphere test below, so only a window of triangles is
-        // tested (in increasing index, the order of testing them all: the same candidates
-        // in the same order). The plates are strips across z, their triangles spread along
-        // x: at 250,000 particles (160 triangles per plate) every particle near a plate
-        // tested all 160 at 9 images. Measured at 250,000 (1 thread, 1,000 steps, 20
-        // rebuilds, separate runs): neighbour phase 47.6 -> 44.0 ns per particle-step.
+        // per mesh its triangles by the x of their centres, and the largest x distance from
+        // a triangle's centre to one of its nodes (`hx`): a triangle whose centre is farther
+        // in x than hx + r + skin from the particle's image has its bounding box farther
+        // than r + skin in x alone and fails the box test of `is_candidate`, so only a
+        // window of triangles is tested (in increasing index, the order of testing them
+        // all: the same candidates in the same order; the 1e-9 margin, ~1e-13 m, covers the
+        // rounding of the box's corners, ~1e-17 m). The plates are strips across z, their
+        // triangles spread along x: at 250,000 particles (160 triangles per plate) every
+        // particle near a plate tested all 160 at 9 images (47.6 ns per particle-step for
+        // the neighbour phase, 1 thread, 1,000 steps, 20 rebuilds). A window by the
+        // largest bounding radius (44.0 ns) still held 60 % of them: the strips' bounding
+        // radius is half the box's z length. By hx, measured per rebuild at 250,000 (1
+        // thread, each part of the rebuild timed): the candidates 178-189 -> 16 ms (the
+        // pair search 195-205 ms).
         let by_x: Vec<(Vec<(f64, u32)>, f64)> = meshes
             .iter()
             .map(|m| {
@@ -163,7 +169,13 @@ impl ShearSim {
                     .map(|(t, c)| (c[0], t as u32))
                     .collect();
                 v.sort_by(|a, b| a.0.total_cmp(&b.0));
-                (v, m.r_bound.iter().cloned().fold(0.0, f64::max))
+                let hx = m
+                    .tris
+                    .iter()
+                    .zip(&m.center)
+                    .flat_map(|(t, c)| t.nodes.iter().map(move |n| (n[0] - c[0]).abs()))
+                    .fold(0.0, f64::max);
+                (v, hx)
             })
             .collect();
         // each share's candidates in particle order, with its particles' counts; joined in
@@ -185,8 +197,8 @@ impl ShearSim {
                     {
                         continue;
                     }
-                    let (sorted, rb_max) = &by_x[m];
-                    let half = (rb_max + r + skin) * (1.0 + 1e-9);
+                    let (sorted, hx) = &by_x[m];
+                    let half = (hx + r + skin) * (1.0 + 1e-9);
                     for img in [4u8, 0, 1, 2, 3, 5, 6, 7, 8] {
                         let s = image_shift(img, lx, lz);
                         let x0 = p[0] - s[0];
@@ -274,12 +286,22 @@ mod tests {
 
     /// The candidates found through the window of triangles by x are those of testing every
     /// triangle of every mesh at every image, in the same order, with the bottom plate
-    /// moved so that its triangles wrapped across the seam.
+    /// moved so that its triangles wrapped across the seam; in the preset's box and in one
+    /// 4 times longer in z (strips whose bounding radius is 4 times their x window).
     #[test]
     fn windowed_plate_candidates_are_every_triangles_in_order() {
-        let case = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
-        let pk = loose_packing(&case);
-        let mut sim = ShearSim::new(&case, &pk);
+        for long_z in [1.0, 4.0] {
+            let mut case =
+                ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+            case.box_z *= long_z;
+            case.particles = (case.particles as f64 * long_z) as usize;
+            windowed_candidates_in(&case);
+        }
+    }
+
+    fn windowed_candidates_in(case: &ShearCase) {
+        let pk = loose_packing(case);
+        let mut sim = ShearSim::new(case, &pk);
         let team = Team::new(2);
         let (lx, lz, skin) = (case.box_x, case.box_z, case.skin);
         for dx in [0.0, 0.37 * lx, 0.91 * lx] {
