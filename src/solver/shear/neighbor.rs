@@ -131,7 +131,19 @@ impl NeighborList {
             members[fill[c as usize] as usize] = p as u32;
             fill[c as usize] += 1;
         }
-        drop((cell_of, fill));
+        drop(fill);
+        // each member's position and radius in member order: a cell's candidates are read
+        // from one contiguous run instead of gathered from the particle arrays, and a
+        // particle's own cell is decoded from `cell_of` instead of found again (the same
+        // values, the same list). Measured: criterion `neighbor build 2500` 1.51 -> 1.31 ms;
+        // the whole list build at 250,000 particles (1 thread) 241-273 -> 212 ms.
+        let rec: Vec<[f64; 4]> = members
+            .iter()
+            .map(|&j| {
+                let p = x[j as usize];
+                [p[0], p[1], p[2], radius[j as usize]]
+            })
+            .collect();
         // about the last list's length: the list changes little between builds (a capacity
         // of 8 per particle held 256 bytes per particle for 140 used)
         let new_pairs: Vec<Pair> = Vec::with_capacity(self.pairs.len() + spare(self.pairs.len()));
@@ -171,7 +183,8 @@ impl NeighborList {
             let mut touching: Vec<bool> = Vec::with_capacity(new_pairs.capacity());
             let mut cand: Vec<(u32, [f64; 3], bool)> = Vec::new();
             for i in range {
-                let (ix, iy, iz) = (cx(x[i][0]), cy(x[i][1]), cz(x[i][2]));
+                let c = cell_of[i] as usize;
+                let (ix, iy, iz) = (c / (ny * nz), (c / nz) % ny, c % nz);
                 // the z columns of i's neighbour cells (periodic)
                 let mut gzs = [0usize; 3];
                 for (g, &dz) in gzs.iter_mut().zip(zs) {
@@ -189,7 +202,8 @@ impl NeighborList {
                         let column = (gx * ny + gy as usize) * nz;
                         for &gz in gzs {
                             let c = column + gz;
-                            let cell = &members[head[c] as usize..head[c + 1] as usize];
+                            let span = head[c] as usize..head[c + 1] as usize;
+                            let cell = &members[span.clone()];
                             // a cell's members are in increasing index (the counting sort
                             // visits the particles in order): the partners j > i are a
                             // tail, found without a branch per member on `j <= i` (taken
@@ -198,11 +212,10 @@ impl NeighborList {
                             // 1.91 -> 1.57 ms per build, with the cells' z columns found
                             // once per particle instead of once per cell.
                             let above = cell.partition_point(|&j| (j as usize) <= i);
-                            for &j in &cell[above..] {
-                                let jj = j as usize;
+                            let recs = &rec[span][above..];
+                            for (&j, xj) in cell[above..].iter().zip(recs) {
                                 let mut shift = [0.0; 3];
-                                let mut d =
-                                    [x[i][0] - x[jj][0], x[i][1] - x[jj][1], x[i][2] - x[jj][2]];
+                                let mut d = [x[i][0] - xj[0], x[i][1] - xj[1], x[i][2] - xj[2]];
                                 if d[0] > 0.5 * box_.lx {
                                     shift[0] = box_.lx;
                                 } else if d[0] < -0.5 * box_.lx {
@@ -213,9 +226,9 @@ impl NeighborList {
                                 } else if d[2] < -0.5 * box_.lz {
                                     shift[2] = -box_.lz;
                                 }
-                                d[0] = x[i][0] - (x[jj][0] + shift[0]);
-                                d[2] = x[i][2] - (x[jj][2] + shift[2]);
-                                let radsum = radius[i] + radius[jj];
+                                d[0] = x[i][0] - (xj[0] + shift[0]);
+                                d[2] = x[i][2] - (xj[2] + shift[2]);
+                                let radsum = radius[i] + xj[3];
                                 let rc = radsum + skin;
                                 let rsq = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
                                 if rsq <= rc * rc {
@@ -243,6 +256,7 @@ impl NeighborList {
             }
             (new_pairs, touching)
         });
+        drop((cell_of, rec));
         let (mut new_pairs, mut touching) = shares.remove(0);
         for (p, t) in shares {
             new_pairs.extend_from_slice(&p);
