@@ -157,7 +157,6 @@ fn process_cpu_seconds() -> Option<f64> {
     Some((utime + stime) / 100.0)
 }
 
-/// The median of `v` (the mean of the two middle values of an even count); None if empty.
 /// `N neighbour rebuilds in S steps (every S/N steps)`.
 fn rebuild_line(rebuilds: u64, steps: u64) -> String {
     match rebuilds {
@@ -169,6 +168,7 @@ fn rebuild_line(rebuilds: u64, steps: u64) -> String {
     }
 }
 
+/// The median of `v` (the mean of the two middle values of an even count); None if empty.
 fn median(mut v: Vec<f64>) -> Option<f64> {
     v.sort_by(f64::total_cmp);
     let n = v.len();

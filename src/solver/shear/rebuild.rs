@@ -6,11 +6,11 @@
 use super::{image_shift, ShearSim};
 use crate::error::{Error, Result};
 use crate::solver::team::{bounds, Team};
+use crate::solver::trimesh::TriMesh;
+use crate::solver::vec3::V3;
 
 /// A plate-triangle candidate of a particle: (mesh, triangle, image).
 type WallCand = (u8, u32, u8);
-use crate::solver::trimesh::TriMesh;
-use crate::solver::vec3::V3;
 
 impl ShearSim {
     /// `Neighbor::decide` with `delay 0`: a rebuild a plate asked for at the previous step
