@@ -692,10 +692,11 @@ impl ShearSim {
         };
         let pd = &self.pair_damp;
         let sum = pairs::PairSums {
-            own: match sums {
+            first: match sums {
                 pairs::Sums::Accumulated => &[],
-                pairs::Sums::Blocks => &self.plan.own,
+                pairs::Sums::Blocks => &self.plan.first,
             },
+            cut: &self.plan.cut,
             csr,
             out: &self.pair_force,
             state: &self.pair_state,
@@ -819,10 +820,11 @@ impl ShearSim {
         let (th, n) = (team.threads(), self.x.len());
         let nl = &self.nl;
         let sum = pairs::PairSums {
-            own: match sums {
+            first: match sums {
                 pairs::Sums::Accumulated => &[],
-                pairs::Sums::Blocks => &self.plan.own,
+                pairs::Sums::Blocks => &self.plan.first,
             },
+            cut: &self.plan.cut,
             csr: pairs::Csr {
                 start: &nl.start,
                 entries: &nl.entries,
