@@ -1338,6 +1338,50 @@ mod tests {
         assert!(!prefetch_pays(2500) || l2_bytes() < 2500 * 144);
     }
 
+    /// With many members a particle can have pairs in three blocks or more: the block of its
+    /// first pair sums the prefix of its pair sum, the later blocks' increments are added
+    /// from `out` ([`BlockPlan::first`]). One force evaluation of a dense sheared state on 1
+    /// and on 7 threads: equal bits, with such particles present.
+    #[test]
+    fn pair_sums_across_three_blocks_give_the_serial_bits() {
+        let base = sheared(RollingModel::Epsd, 1.0, 0.5);
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    let mut s = base.clone();
+                    s.evaluate_forces().unwrap();
+                    s
+                })
+        };
+        let (one, seven) = (on(1), on(7));
+        let (nl, cut) = (&seven.nl, &seven.plan.cut);
+        assert_eq!(cut.len(), 8, "one block per member");
+        let blocks = |q: usize| {
+            let entries = &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize];
+            let mut b: Vec<usize> = entries
+                .iter()
+                .map(|&(k, _)| cut[1..].partition_point(|&c| c <= k as usize))
+                .collect();
+            b.dedup();
+            b.len()
+        };
+        let spread = (0..seven.x.len()).filter(|&q| blocks(q) >= 3).count();
+        assert!(spread > 0, "no particle with pairs in three blocks");
+        let bits = |s: &ShearSim| {
+            let v: Vec<u64> = (s.f.iter().chain(&s.torque))
+                .flatten()
+                .chain(s.top_force.iter().chain(&s.bottom_force))
+                .map(|x| x.to_bits())
+                .collect();
+            v
+        };
+        assert!(bits(&one) == bits(&seven), "7 threads differ from 1");
+        assert!(one.f.iter().flatten().any(|&x| x != 0.0));
+    }
+
     /// Each SIMD path this CPU runs against the scalar one over every listed pair of dense
     /// sheared states of every rolling model, with and without history update, then 200
     /// whole steps each: equal bits everywhere. Two materials: the paper's (e = 1, eta_r
