@@ -225,6 +225,17 @@ fn worker(s: &Shared, t: usize) {
     }
 }
 
+/// `f` run in a rayon pool of `threads` threads, where the shear box's team takes its size
+/// (tests that compare thread counts).
+#[cfg(test)]
+pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool")
+        .install(f)
+}
+
 /// Member `t`'s share of `n` items among `threads`: contiguous, in order, sizes differing
 /// by at most one.
 pub fn bounds(n: usize, threads: usize, t: usize) -> std::ops::Range<usize> {

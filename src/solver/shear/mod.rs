@@ -1030,18 +1030,14 @@ mod tests {
         for model in [RollingModel::Epsd, RollingModel::EpsdImplicit] {
             let c = preset(model);
             let run = |threads: usize| {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap()
-                    .install(|| {
-                        let mut s = ShearSim::new(&c, &dense);
-                        s.setup(c.stages[0].speed).unwrap();
-                        for _ in 0..1500 {
-                            s.step().unwrap();
-                        }
-                        s
-                    })
+                crate::solver::team::on_threads(threads, || {
+                    let mut s = ShearSim::new(&c, &dense);
+                    s.setup(c.stages[0].speed).unwrap();
+                    for _ in 0..1500 {
+                        s.step().unwrap();
+                    }
+                    s
+                })
             };
             let one = run(1);
             let count = |f: fn(&PairState) -> bool| one.pair_state.iter().filter(|a| f(a)).count();

@@ -1346,15 +1346,11 @@ mod tests {
     fn pair_sums_across_three_blocks_give_the_serial_bits() {
         let base = sheared(RollingModel::Epsd, 1.0, 0.5);
         let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| {
-                    let mut s = base.clone();
-                    s.evaluate_forces().unwrap();
-                    s
-                })
+            crate::solver::team::on_threads(threads, || {
+                let mut s = base.clone();
+                s.evaluate_forces().unwrap();
+                s
+            })
         };
         let (one, seven) = (on(1), on(7));
         let (nl, cut) = (&seven.nl, &seven.plan.cut);
