@@ -317,8 +317,10 @@ pub(super) fn pass(
         let fresh = plan.key != key;
         plan.key = key;
         resize_snug(&mut plan.first, n);
-        plan.cut.clone_from(&cut);
-        let block_of = |k: u32| cut[1..].partition_point(|&c| c <= k as usize) as u32;
+        if fresh {
+            plan.cut.clone_from(&cut);
+        }
+        let block_of = |k: u32| block_of(&cut, k as usize) as u32;
         let parts: Vec<_> = split_mut(acc, th)
             .into_iter()
             .zip(split_mut(&mut plan.first, th))
@@ -534,9 +536,9 @@ pub(super) struct BlockPlan {
     /// The list (its build in this process) and team size `first` was found for.
     key: Option<(u64, usize)>,
     /// Per particle: the block of its first pair, with [`MIXED`] when it has pairs in a
-    /// later block too (0 for a particle without pairs). A particle's pairs are in
-    /// increasing pair index, so those in the block of its first pair come before all the
-    /// others: that block sums their increments in `acc` as the serial pass does (the
+    /// later block too (its own member's block for a particle without pairs: nothing is
+    /// delivered to it). A particle's pairs are in increasing pair index, so those in the
+    /// block of its first pair come before all the others: that block sums their increments in `acc` as the serial pass does (the
     /// prefix of its sum), and the later blocks' increments are added to that prefix in
     /// pair order after the pass, the serial pass's additions in its order. Measured on the
     /// fast state (2 threads, avx512, alternating every 250 steps in one process), against
@@ -547,8 +549,8 @@ pub(super) struct BlockPlan {
     /// The blocks' first pairs (and the list's length) this plan was made for.
     pub cut: Vec<usize>,
     /// Every particle's `acc` is zero: [`PairSums::add`] zeroes a sum it read, and the
-    /// blocks write only the sums of the particles whose first pair they hold. Set by the caller after summing every
-    /// particle; a pass that finds it unset zeroes `acc` itself. Measured on the fast state
+    /// blocks write only the sums of the particles whose first pair they hold. Set by the
+    /// caller after summing every particle; a pass that finds it unset zeroes `acc` itself. Measured on the fast state
     /// (2 threads, avx512, alternating every 250 steps in one process): finding the owners
     /// and zeroing the sums every step in a region of their own cost
     /// about 2.6 ns per particle-step.
@@ -617,6 +619,12 @@ const CHUNK: usize = 256;
 
 /// [`BlockPlan::first`]'s flag of a particle with pairs in more than one block.
 const MIXED: u32 = 1 << 31;
+
+/// The block holding pair `k`, the blocks starting at pairs `cut` (`cut[0]` = 0, the last
+/// entry the list's length).
+fn block_of(cut: &[usize], k: usize) -> usize {
+    cut[1..].partition_point(|&c| c <= k)
+}
 
 /// One thread's block of the pair list with its per-pair slots (`out`, `damp` empty where
 /// not written), cut into [`Piece`]s as it is evaluated. Measured on the fast state (2
@@ -1359,7 +1367,7 @@ mod tests {
             let entries = &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize];
             let mut b: Vec<usize> = entries
                 .iter()
-                .map(|&(k, _)| cut[1..].partition_point(|&c| c <= k as usize))
+                .map(|&(k, _)| block_of(cut, k as usize))
                 .collect();
             b.dedup();
             b.len()
