@@ -7,6 +7,7 @@
 // Kernels index x/y/z components explicitly, as the LIGGGHTS code they mirror does.
 #![allow(clippy::needless_range_loop)]
 
+pub mod calibration;
 pub mod cli;
 pub mod compare;
 pub mod deck;

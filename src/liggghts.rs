@@ -93,6 +93,7 @@ impl Liggghts {
             }
             None => Command::new(&self.binary),
         };
+        die_with_parent(&mut cmd);
         let mut child = cmd
             .args(["-in", DECK_NAME, "-log", LOG_NAME])
             .current_dir(dir)
@@ -139,6 +140,34 @@ impl Liggghts {
         }
     }
 }
+
+/// Makes the spawned process (LIGGGHTS or mpirun, which passes it on to its ranks) receive
+/// SIGTERM when the thread that spawned it ends, whatever ends it: SIGTERM from SLURM or
+/// systemd, SIGKILL, a panic. Without it a killed `verify` leaves LIGGGHTS running and
+/// writing into the run's folder. The spawning thread waits for the child
+/// ([`Liggghts::run_with_progress`]), so it outlives it in every normal run.
+#[cfg(target_os = "linux")]
+fn die_with_parent(cmd: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    let parent = std::process::id();
+    // SAFETY: the closure runs in the forked child before exec; it calls only prctl, getppid
+    // and _exit, which are async-signal-safe, and allocates nothing. The getppid check
+    // closes the race of a parent that died before prctl took effect.
+    unsafe {
+        cmd.pre_exec(move || {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            if libc::getppid() as u32 != parent {
+                libc::_exit(143);
+            }
+            Ok(())
+        });
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn die_with_parent(_cmd: &mut Command) {}
 
 /// One `ITEM: TIMESTEP` block of a LAMMPS text dump: step and the data rows.
 fn dump_blocks(path: &Path) -> Result<Vec<(u64, Vec<Vec<f64>>)>> {

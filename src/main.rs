@@ -1,5 +1,5 @@
 //! `verify`: parses the command line and maps the outcome to an exit code
-//! (0 agree, 1 disagree, 2 error).
+//! (0 agree, 1 disagree, 2 error, 3 inconclusive).
 
 use clap::CommandFactory;
 use dem_verify::cli::study::execute;
@@ -53,6 +53,10 @@ fn main() -> ExitCode {
         Ok(Verdict::Disagree) => {
             println!("verdict: DISAGREE");
             (1, "disagree", None)
+        }
+        Ok(Verdict::Inconclusive) => {
+            println!("verdict: inconclusive");
+            (3, "inconclusive", None)
         }
         Ok(Verdict::Done) => (0, "done", None),
         Err(e) => {

@@ -166,19 +166,21 @@ pub const CHECKPOINT_EVERY: std::time::Duration = std::time::Duration::from_secs
 pub const CHECKPOINT_NAME: &str = "native_checkpoint.bin";
 
 /// Version of the checkpoint format; a checkpoint of another version is not read (3: the
-/// per-pair state split from epsd_implicit's per-pair dashpot, 2026-12-02).
-const CHECKPOINT_VERSION: u32 = 3;
+/// per-pair state split from epsd_implicit's per-pair dashpot, 2026-12-02; 4: sealed, with the
+/// case's hash and the payload's SHA-256 in a header, 2026-12-04).
+const CHECKPOINT_VERSION: u32 = 4;
+
+/// What the seal of a checkpoint names ([`crate::fsutil::seal`]).
+const CHECKPOINT_KIND: &str = "native shear checkpoint";
 
 /// Everything a native run holds part way: the whole solver state (particles, pair and wall
 /// histories, neighbour list and its rebuild state, servo, plates and meshes, step), the rows
 /// and profile samples so far, the compacted state, the stage, and the wall time spent.
-/// Written atomically (MessagePack, every f64 as its 64 bits), so the resumed run is bit-identical to
-/// an uninterrupted one.
+/// MessagePack (every f64 as its 64 bits), so the resumed run is bit-identical to an
+/// uninterrupted one, sealed with the case's hash and the payload's SHA-256 and written
+/// atomically: a checkpoint that does not verify is never resumed.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct NativeCheckpoint {
-    version: u32,
-    /// The case it belongs to (JSON): a checkpoint of another case is not read.
-    case: String,
     stage: usize,
     wall_time: f64,
     sim: ShearSim,
@@ -187,31 +189,35 @@ struct NativeCheckpoint {
     profile: Vec<ProfileSample>,
 }
 
-/// The checkpoint in `out` if it belongs to `case` and this format; a note on stderr when one
-/// exists but cannot be used.
-fn load_checkpoint(out: &Path, case: &ShearCase) -> Option<NativeCheckpoint> {
+/// The checkpoint in `out` if it verifies against `case` (JSON) and this format. One that
+/// exists but does not verify is refused with a note on stderr saying why, and kept as
+/// `native_checkpoint.rejected` for inspection: the run starts over.
+fn load_checkpoint(out: &Path, case_json: &str) -> Option<NativeCheckpoint> {
     let path = out.join(CHECKPOINT_NAME);
     let bytes = std::fs::read(&path).ok()?;
-    let cp: NativeCheckpoint = match rmp_serde::from_slice(&bytes) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!(
-                "note: {} is not readable ({e}); the run starts over",
-                path.display()
-            );
-            return None;
-        }
-    };
-    if cp.version != CHECKPOINT_VERSION
-        || Some(&cp.case) != serde_json::to_string(case).ok().as_ref()
-    {
+    let refuse = |why: String| {
+        let kept = out.join("native_checkpoint.rejected");
+        let _ = std::fs::rename(&path, &kept);
         eprintln!(
-            "note: {} is of another case or format; the run starts over",
-            path.display()
+            "note: {} is not resumed: {why}; the run starts over (the file is kept as {})",
+            path.display(),
+            kept.display()
         );
-        return None;
+        None
+    };
+    let payload = match crate::fsutil::unseal(
+        &bytes,
+        CHECKPOINT_KIND,
+        CHECKPOINT_VERSION,
+        case_json.as_bytes(),
+    ) {
+        Ok(p) => p,
+        Err(why) => return refuse(why),
+    };
+    match rmp_serde::from_slice(payload) {
+        Ok(cp) => Some(cp),
+        Err(e) => refuse(format!("its content does not decode ({e})")),
     }
-    Some(cp)
 }
 
 /// Runs the native solver. Outputs as LIGGGHTS' thermo: step 0, every `output_every`, and
@@ -232,9 +238,10 @@ pub fn run_native(
     let ends = case.run_ends();
     let windows = schedule(case);
     let rec = |sim: &ShearSim| Row::from(&sim.record());
+    let case_json = serde_json::to_string(case)?;
     let resumed = match checkpointing {
         Checkpointing::Off => None,
-        Checkpointing::Every(_) => load_checkpoint(out, case),
+        Checkpointing::Every(_) => load_checkpoint(out, &case_json),
     };
     let (mut sim, mut rows, mut compacted, mut profile, first_stage, wall_before) = match resumed {
         Some(cp) => {
@@ -260,7 +267,6 @@ pub fn run_native(
             0.0,
         ),
     };
-    let case_json = serde_json::to_string(case)?;
     let mut last_checkpoint = Instant::now();
     let result = (|| -> Result<()> {
         if first_stage == 0 && sim.step == 0 {
@@ -307,8 +313,6 @@ pub fn run_native(
                         // the stage index is k here; a checkpoint at a stage's last step
                         // would need the next stage's setup, so none is taken there
                         let cp = NativeCheckpoint {
-                            version: CHECKPOINT_VERSION,
-                            case: case_json.clone(),
                             stage: k,
                             wall_time: wall_before + t0.elapsed().as_secs_f64(),
                             sim: sim.clone(),
@@ -320,7 +324,15 @@ pub fn run_native(
                             step: sim.step,
                             msg: format!("cannot encode the checkpoint: {e}"),
                         })?;
-                        write_atomic(&out.join(CHECKPOINT_NAME), &bytes)?;
+                        write_atomic(
+                            &out.join(CHECKPOINT_NAME),
+                            &crate::fsutil::seal(
+                                CHECKPOINT_KIND,
+                                CHECKPOINT_VERSION,
+                                case_json.as_bytes(),
+                                &bytes,
+                            ),
+                        )?;
                         last_checkpoint = Instant::now();
                     }
                 }

@@ -166,7 +166,7 @@ fn studies_round_trip_plan_and_refuse_unknown_fields() {
         "preset = \"ci\"",
         "strain = 0.05",
         "native_only = true",
-        "mu_atol = 0.02",
+        "mu_margin = 0.03",
     ] {
         assert!(text.contains(line), "{line}: {text}");
     }

@@ -38,6 +38,13 @@ fn native_matches_stored_reference_for_every_case() {
         .unwrap()
         {
             assert!(r.pass, "{name}: {} rel err {:e}", r.channel, r.max_rel_err);
+            // bit for bit, as claimed (the stored outputs have 17 significant digits)
+            assert!(
+                r.max_abs_err == 0.0,
+                "{name}: {} not bit for bit: abs err {:e}",
+                r.channel,
+                r.max_abs_err
+            );
         }
         assert!(root()
             .join("reference/contact")

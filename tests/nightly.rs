@@ -16,7 +16,7 @@ fn body_attr(dom: &str, name: &str) -> Option<usize> {
 }
 
 #[test]
-fn quick_night_agrees_and_its_report_renders_in_chromium() {
+fn quick_night_never_disagrees_and_its_report_renders_in_chromium() {
     common::liggghts();
     let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("nightly-test");
     let _ = std::fs::remove_dir_all(&root);
@@ -30,18 +30,27 @@ fn quick_night_agrees_and_its_report_renders_in_chromium() {
         "--history",
         history.to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    // one seed per shear point: a row whose two block CIs straddle the margin cannot decide,
+    // and the night then says inconclusive (exit 3); a disagreement or an error never passes
+    let code = o.status.code();
+    assert!(code == Some(0) || code == Some(3), "{}", text(&o));
 
     // the night's outcome, read back typed (schema checked)
     let s: NightlySummary = dem_verify::run::load(&out.join("summary.json")).unwrap();
     assert!(s.pass && s.quick);
+    assert_eq!(
+        code == Some(3),
+        s.shear.iter().any(|r| r.inconclusive),
+        "exit 3 exactly when a row is inconclusive"
+    );
     assert_eq!(
         s.contact.len(),
         23,
         "every built-in case x applicable model"
     );
     for c in &s.contact {
-        assert!(c.max_rel_err <= 1e-9, "{c:?}");
+        // the verdict's rule is rtol 1e-9; the claim (README, docs/nightly.md) is bit for bit
+        assert!(c.max_rel_err == 0.0, "not bit for bit: {c:?}");
     }
     assert_eq!(s.shear.len(), 5);
     for r in &s.shear {

@@ -54,7 +54,7 @@ fn snapshots_load_in_vtk_with_their_fields_count_and_time() {
         &[
             "--snapshot-every",
             "4000",
-            "--mu-atol",
+            "--mu-margin",
             "0.5",
             "--stress-rtol",
             "0.5",

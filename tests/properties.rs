@@ -225,7 +225,7 @@ const SHEAR_OPTIONS: [&str; 14] = [
     "--tooth-wavelength",
     "--particles",
     "--restitution",
-    "--mu-atol",
+    "--mu-margin",
     "--stress-rtol",
 ];
 

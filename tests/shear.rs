@@ -31,20 +31,36 @@ fn ci_preset_agrees_with_liggghts() {
         "0.5",
         "--preset",
         "ci",
-        // The statistical resolution of 3 seeds of 300 particles: over 9 paired seeds at
-        // (0.5, 0.5), e = 1, the per-seed difference native - LIGGGHTS had mean -0.0005 and
-        // standard deviation 0.061 (2026-12-02; e = 0.5: +0.014 and 0.043), so the mean of 3
-        // seeds scatters by 0.035 around zero; seeds 1-3 differ by 0.037 (the default 0.02 is
-        // meant for 2500 particles).
+        // The default equivalence margin 0.03: 3 seeds of 300 particles (per-seed paired
+        // spread about 0.06-0.07) cannot show equivalence within it, so the verdict must be
+        // inconclusive (exit 3, naming the seeds that would decide) or agree, never DISAGREE
+        // (issue #35: the fixed |dmu| <= 0.02 rule said DISAGREE in 5 of 7 invocations).
         // Contact-level agreement is held by tests/replay.rs (1e-13 at step 1).
-        "--mu-atol",
-        "0.06",
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let t = text(&o);
+    assert!(matches!(o.status.code(), Some(0) | Some(3)), "{t}");
     let s = summary(&out);
     assert!(s.pass);
+    let eq = s
+        .mu_equivalence
+        .as_ref()
+        .expect("the steady-mu equivalence test");
+    assert_eq!((eq.n, eq.margin), (3, 0.03));
+    assert!(eq.ci90.is_finite() && eq.ci90 > 0.0, "{eq:?}");
+    match o.status.code() {
+        Some(3) => {
+            assert_eq!(eq.outcome, dem_verify::compare::Outcome::Inconclusive);
+            assert!(t.contains("verdict: inconclusive"), "{t}");
+            let k = eq.seeds_needed.expect("seeds that would decide");
+            assert!(
+                k > 3 && t.contains(&format!("about {k} seeds would decide")),
+                "{t}"
+            );
+        }
+        _ => assert!(t.contains("verdict: agree"), "{t}"),
+    }
     let names: Vec<&str> = s.results.iter().map(|r| r.channel.as_str()).collect();
     assert_eq!(
         names,
@@ -52,7 +68,6 @@ fn ci_preset_agrees_with_liggghts() {
             "normal_stress_liggghts",
             "normal_stress_native",
             "mu_steady",
-            "mu_paired",
             "slip_bottom",
             "slip_top"
         ]
@@ -151,11 +166,11 @@ fn ci_preset_agrees_with_liggghts() {
     let area = wrong[0].0;
     let series: Vec<_> = wrong.into_iter().map(|w| w.1).collect();
     let wrong = steady(&series, s.steady_window_steps, area);
-    let (control, _) = mu_results("control", "epsd", lig, &wrong, 0, 0.06);
-    eprintln!("negative control (mu_p x 0.3): {control:?}");
+    let (control, _, eq) = mu_results("control", "epsd", lig, &wrong, 0, 0.03);
+    eprintln!("negative control (mu_p x 0.3): {control:?} {eq:?}");
     assert!(
-        control.iter().all(|r| !r.pass) && control.len() == 2,
-        "a friction 70 % off passes the steady comparison: {control:?}"
+        control.iter().all(|r| !r.pass && !r.inconclusive) && control.len() == 1,
+        "a friction 70 % off is not found DISAGREE by the steady comparison: {control:?} {eq:?}"
     );
     for f in [
         "mu_strain.svg",

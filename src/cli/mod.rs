@@ -126,7 +126,7 @@ impl LiggghtsArgs {
         verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n  \
         verify replay --mu-r 0.5 --preset ci             # the gouge contact by contact from LIGGGHTS' states\n  \
         verify nightly --out runs/nightly/today          # everything, report.html\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error."
+        Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive (a statistical verdict its seeds cannot decide)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -151,7 +151,7 @@ pub enum Command {
         verify shear --mu-r 0.5 --eta-r 0.5 --preset ci   # both codes, 3 seeds, minutes\n  \
         verify shear --mu-r 0.5 --preset fast --native-only --seeds 6\n  \
         verify shear --preset paper --mu-r 1 --eta-r 0.5 --native-only   # hours; rerun to resume\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error.")]
+        Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive (the paired CI straddles the margin; the line before the verdict says how many seeds would decide).")]
     Shear(shear::ShearArgs),
     /// Time-step convergence: the same case from the same compacted state at smaller dt.
     #[command(after_help = "Examples:\n  \
@@ -164,7 +164,7 @@ pub enum Command {
     #[command(after_help = "Examples:\n  \
         verify nightly --quick --out runs/nightly/quick   # minutes: ci preset, one seed\n  \
         tools/nightly.sh                                  # the full night into runs/nightly/<date>\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error.")]
+        Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive.")]
     Nightly(nightly::NightlyArgs),
     /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,
     /// report with the paper's figures and conclusions.
@@ -199,7 +199,7 @@ pub enum Command {
         verify run studies/fast-map.toml --dry-run      # the plan only\n  \
         verify run runs/shear-x/study.toml              # repeat a run (finished parts reused)\n  \
         verify run studies/paper.toml --jobs 2          # a field overridden\n\n\
-        Exit status: the command's (0 agree, 1 disagree, 2 error).")]
+        Exit status: the command's (0 agree, 1 disagree, 2 error, 3 inconclusive).")]
     Run(study::RunArgs),
 }
 

@@ -175,7 +175,12 @@ pub fn study_args(path: &Path, overrides: &[String]) -> Result<Vec<String>> {
         .expect("a study command is a subcommand");
     let valid: Vec<String> = cmd
         .get_arguments()
-        .filter_map(|a| a.get_long())
+        .flat_map(|a| {
+            // a renamed option's old name (a visible alias) still reads older study files
+            a.get_long()
+                .into_iter()
+                .chain(a.get_visible_aliases().into_iter().flatten())
+        })
         .filter(|l| !matches!(*l, "help" | "json"))
         .map(|l| l.replace('-', "_"))
         .collect();

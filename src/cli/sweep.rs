@@ -121,9 +121,7 @@ pub fn sweep(a: SweepArgs) -> Result<Verdict> {
                 .parent()
                 .filter(|p| !p.as_os_str().is_empty())
                 .unwrap_or(Path::new("."));
-            if threads == 0 {
-                return Err(Error::invalid("--threads", 0, ">= 1"));
-            }
+            crate::run::check_threads("--threads", threads)?;
             let t = Instant::now();
             let (res, ran) = run_one(&m, dir, index, threads)?;
             println!(

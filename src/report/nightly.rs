@@ -25,6 +25,15 @@ fn status_cell(pass: bool, error: &Option<String>) -> Cell {
     (text(st), class)
 }
 
+/// A shear row's status: as [`status`], and "inconclusive" (amber) when its seeds could not
+/// decide.
+fn shear_status(r: &ShearRow) -> (&'static str, &'static str) {
+    match status(r.pass, &r.error) {
+        ("agree", _) if r.inconclusive => ("inconclusive", "warn"),
+        other => other,
+    }
+}
+
 fn num(v: Option<f64>, prec: usize) -> String {
     match v {
         Some(x) if x.is_finite() => format!("{x:.prec$}"),
@@ -48,7 +57,13 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
     let plots = out.join("plots");
     let mut p = Page::new(&format!("verify nightly {}", s.date_utc));
     p.push(html! { h1 { "Native DEM vs LIGGGHTS: nightly agreement report" } });
-    let (verdict, class) = if s.pass {
+    let undecided = s.shear.iter().filter(|r| r.inconclusive).count();
+    let (verdict, class) = if s.pass && undecided > 0 {
+        (
+            "NO DISAGREEMENT; SOME CASES INCONCLUSIVE (more seeds would decide)",
+            "warn",
+        )
+    } else if s.pass {
         ("ALL CASES AGREE", "pass")
     } else if s.errors.is_empty() {
         ("DISAGREEMENT", "fail")
@@ -85,13 +100,13 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
     }
     let c_ok = s.contact.iter().filter(|c| c.pass).count();
     let c_bit = s.contact.iter().filter(|c| c.max_rel_err == 0.0).count();
-    let s_ok = s.shear.iter().filter(|r| r.pass).count();
+    let s_ok = s.shear.iter().filter(|r| r.pass && !r.inconclusive).count();
     let dmu_max = s.shear.iter().filter_map(|r| r.dmu).fold(0.0, f64::max);
     p.push(html! {
         p style="font-size:18px" {
             "Contact laws: " b { (c_ok) "/" (s.contact.len()) } " runs agree (" (c_bit)
             " bit for bit). Shear box: " b { (s_ok) "/" (s.shear.len()) }
-            " cases agree; largest |Δμ| between the codes " (format!("{dmu_max:.3}")) "."
+            " cases agree, " (undecided) " inconclusive; largest |Δμ| between the codes " (format!("{dmu_max:.3}")) "."
         }
     });
 
@@ -99,8 +114,9 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
     p.heading("overview", "Overview");
     let mut rows = Vec::new();
     for r in &s.shear {
+        let (st, class) = shear_status(r);
         rows.push(vec![
-            status_cell(r.pass, &r.error),
+            (text(st), class),
             (text("shear"), ""),
             (html! { a href={"#" (anchor(&r.dir))} { (r.name) } }, ""),
             (
@@ -120,7 +136,7 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             ),
             (
                 text(format!(
-                    "|Δμ| ≤ {} and 95 % CIs overlap; stress within {} %",
+                    "paired Δμ within ±{} (equivalence: agree when its 90 % CI lies inside); stress within {} %",
                     r.mu_atol,
                     100.0 * r.stress_rtol
                 )),
@@ -300,7 +316,7 @@ fn anchor(dir: &str) -> String {
 }
 
 fn shear_section(p: &mut Page, r: &ShearRow, out: &Path) -> Result<()> {
-    let (st, class) = status(r.pass, &r.error);
+    let (st, class) = shear_status(r);
     p.push(html! { h3 id=(anchor(&r.dir)) { (r.name) " — " span class=(class) { (st) } } });
     if let Some(e) = &r.error {
         p.push(html! { pre.fail { (e) } });

@@ -136,10 +136,14 @@ pub fn log_error_plot(
         .collect();
     drawn.push(Curve::new("tolerance", &tol, 3).dashed());
     let fmt = |v: &f64| format!("1e{}", v.round() as i64);
+    // finite values only: an infinite error (a NaN or inf in a series) would make the axis
+    // infinite, and plotters' tick search never ends on one
     let top = logged
         .iter()
         .flat_map(|c| c.1.iter().map(|p| p.1))
-        .fold(lg(tolerance), f64::max)
+        .chain([lg(tolerance)])
+        .filter(|v| v.is_finite())
+        .fold(lg(floor), f64::max)
         .ceil()
         + 1.0;
     plot_with(
@@ -201,8 +205,8 @@ fn plot_with(
         0.5 * y0.abs().max(1.0)
     };
     let (y0, y1, pad) = match y_range {
-        Some((a, b)) => (a, b, 0.0),
-        None => (y0, y1, pad),
+        Some((a, b)) if a.is_finite() && b.is_finite() && a < b => (a, b, 0.0),
+        _ => (y0, y1, pad),
     };
     let tmp = path.with_extension("svg.tmp");
     {
@@ -287,6 +291,23 @@ fn plot_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn non_finite_errors_and_tolerances_end_in_a_plot_not_a_hang() {
+        let dir = tempfile::tempdir().unwrap();
+        for (v, tol) in [
+            (f64::INFINITY, 1e-9),
+            (f64::NAN, 1e-9),
+            (f64::NEG_INFINITY, 1e-9),
+            (1e-3, f64::INFINITY),
+            (1e-3, f64::NAN),
+        ] {
+            let curves = vec![("c".to_string(), vec![(0.0, 1e-12), (1.0, v), (2.0, 0.0)])];
+            let p = dir.path().join("e.svg");
+            log_error_plot(&p, "t", "step", &curves, tol, 1e-17).unwrap();
+            assert!(std::fs::read_to_string(&p).unwrap().contains("<svg"));
+        }
+    }
 
     #[test]
     fn writes_an_svg_with_both_labels() {

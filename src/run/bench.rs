@@ -221,9 +221,13 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     if a.steps == 0 {
         return Err(Error::invalid("--steps", 0, ">= 1"));
     }
-    if a.threads.contains(&0) || a.procs.contains(&0) {
-        return Err(Error::invalid("--threads/--procs", 0, ">= 1"));
+    for &t in &a.threads {
+        super::check_threads("--threads", t)?;
     }
+    for &p in &a.procs {
+        super::check_threads("--procs", p)?;
+    }
+    crate::spec::shear::check_particles("--particles", a.particles)?;
     if a.rounds == 0 || a.rounds > MAX_ROUNDS {
         return Err(Error::invalid(
             "--rounds",

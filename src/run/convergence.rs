@@ -55,15 +55,20 @@ fn at_factor(case: &ShearCase, f: f64) -> Result<ShearCase> {
 /// Runs the study (reusing every stored current run), prints its table, writes plots and
 /// `summary.json`.
 pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
-    if a.dt_factors.is_empty()
+    let mut distinct = a.dt_factors.clone();
+    distinct.sort_by(f64::total_cmp);
+    distinct.dedup();
+    if distinct.len() < 2
+        || distinct.len() != a.dt_factors.len()
         || a.dt_factors
             .iter()
             .any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0))
     {
+        // a study of one dt (or a factor twice) compares a run with itself: no verdict
         return Err(Error::invalid(
             "--dt-factors",
             format!("{:?}", a.dt_factors),
-            "factors in (0, 1], e.g. 1,0.5,0.25",
+            "two or more distinct factors in (0, 1], e.g. 1,0.5,0.25",
         ));
     }
     let sh = &a.shear;

@@ -26,6 +26,26 @@ use std::time::Duration;
 /// layer; readers refuse other versions.
 pub const SCHEMA: u32 = 2;
 
+/// Most native threads per run: 4 per core of this machine (at least 8). More threads than
+/// cores only share them; thousands exhaust the process's threads (a panic) or stall.
+pub fn max_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get()) * 4
+}
+
+/// The one rule for a thread count (`--threads` of every command).
+pub fn check_threads(field: &str, n: usize) -> crate::error::Result<usize> {
+    let max = max_threads().max(8);
+    if (1..=max).contains(&n) {
+        Ok(n)
+    } else {
+        Err(crate::error::Error::invalid(
+            field,
+            n,
+            format!("1 ..= {max} (4 x this machine's cores, at least 8)"),
+        ))
+    }
+}
+
 /// The summary file the running command wrote last (what `--json` prints).
 static SUMMARY: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);
 
@@ -45,6 +65,9 @@ pub fn summary_written() -> Option<PathBuf> {
 pub enum Verdict {
     Agree,
     Disagree,
+    /// A statistical comparison whose data cannot decide (its CI straddles the margin): exit
+    /// 3, `verdict: inconclusive` with the seeds that would decide.
+    Inconclusive,
     /// A command that compares nothing (decks, lists, plans, completions): exit 0, no
     /// verdict line.
     Done,

@@ -121,8 +121,13 @@ pub struct ShearRow {
     pub eta_r: f64,
     pub seeds: u64,
     pub pass: bool,
+    /// The row's statistical channels could not decide (its verdict is inconclusive);
+    /// absent in nights before 2026-12-04.
+    #[serde(default)]
+    pub inconclusive: bool,
     pub error: Option<String>,
-    /// |mu_LIGGGHTS - mu_native| and its limit (the 95 % CIs must overlap as well).
+    /// |paired mean of mu_native - mu_LIGGGHTS| and its equivalence margin (stored nights
+    /// before 2026-12-04: |difference of the means| and its fixed limit).
     pub dmu: Option<f64>,
     pub mu_atol: f64,
     pub ci_overlap: Option<bool>,

@@ -3,8 +3,7 @@
 
 use super::{utc_stamp, Engine, LiggghtsRequest, Verdict, SHEAR_TIMEOUT_S};
 use crate::compare::{
-    lockstep, steady, steady_window, within_cis, Horizon, Steady, LOCKSTEP_RTOL, MU_ATOL,
-    STRESS_RTOL,
+    lockstep, steady, steady_window, Horizon, Steady, LOCKSTEP_RTOL, MU_MARGIN, STRESS_RTOL,
 };
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
@@ -38,7 +37,7 @@ pub struct ShearRequest {
     /// Refuse to run when the explicit rolling dashpot is expected to be unstable.
     pub strict_stability: bool,
     /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (CIs must overlap too).
-    pub mu_atol: f64,
+    pub mu_margin: f64,
     /// Largest accepted relative deviation of each code's mean normal stress from the target.
     pub stress_rtol: f64,
     pub liggghts: LiggghtsRequest,
@@ -57,7 +56,7 @@ impl ShearRequest {
             out,
             quiet: false,
             strict_stability: false,
-            mu_atol: MU_ATOL,
+            mu_margin: MU_MARGIN,
             stress_rtol: STRESS_RTOL,
             liggghts: LiggghtsRequest {
                 binary: None,
@@ -92,8 +91,9 @@ pub fn shear_case(c: &CaseRequest, seed: u64, engine: Engine) -> Result<(ShearCa
 }
 
 /// What is kept per seed and code so that an interrupted `verify shear` resumes.
-/// The series' row count and SHA-256 (absent in records stored before they were kept) let a
-/// resumed study refuse a cut or edited series instead of reporting it.
+/// The series' row count and SHA-256 and the profile's SHA-256 let a resumed study refuse a
+/// cut or edited file instead of reporting it; a record without them (stored before they were
+/// kept) is not trusted: its seed runs again.
 #[derive(Serialize, Deserialize)]
 struct RunRecord {
     case: String,
@@ -103,6 +103,8 @@ struct RunRecord {
     rows: Option<usize>,
     #[serde(default)]
     sha256: Option<String>,
+    #[serde(default)]
+    profile_sha256: Option<String>,
     /// LIGGGHTS: the restart steps an interrupted run continued from ([`CodeRun::resumed_from`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     resumed_from: Vec<u64>,
@@ -121,11 +123,11 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
     }
     let csv_path = dir.join(format!("{code}.csv"));
     let bytes = std::fs::read(&csv_path).ok()?;
-    if rec
-        .sha256
-        .as_ref()
-        .is_some_and(|h| *h != crate::fsutil::sha256_hex(&bytes))
-    {
+    if rec.sha256.as_ref()? != &crate::fsutil::sha256_hex(&bytes) {
+        return None;
+    }
+    let profile_bytes = std::fs::read(dir.join(format!("{code}_profile.json"))).ok()?;
+    if rec.profile_sha256.as_ref()? != &crate::fsutil::sha256_hex(&profile_bytes) {
         return None;
     }
     let s = Series::read_csv(&csv_path).ok()?;
@@ -133,7 +135,7 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
     let complete = s.steps.first() == Some(&0)
         && s.steps.windows(2).all(|w| w[0] < w[1])
         && ends.iter().all(|e| s.steps.binary_search(e).is_ok())
-        && rec.rows.is_none_or(|n| n == s.rows.len());
+        && rec.rows == Some(s.rows.len());
     if !complete {
         return None;
     }
@@ -158,10 +160,7 @@ fn cached(dir: &Path, code: &str, case: &ShearCase) -> Option<CodeRun> {
         })
         .collect();
     // results stored without a velocity profile are run again
-    let profiles = serde_json::from_str(
-        &std::fs::read_to_string(dir.join(format!("{code}_profile.json"))).ok()?,
-    )
-    .ok()?;
+    let profiles = serde_json::from_slice(&profile_bytes).ok()?;
     Some(CodeRun {
         rows,
         wall_time: rec.wall_time,
@@ -177,12 +176,14 @@ fn store(dir: &Path, code: &str, case: &ShearCase, run: &CodeRun) -> Result<Seri
     let s = crate::shear::shear_series(case, &run.rows);
     let bytes = s.csv_bytes(&csv_path)?;
     write_atomic(&csv_path, &bytes)?;
+    let profile = serde_json::to_string_pretty(&run.profiles)?;
     let rec = RunRecord {
         case: serde_json::to_string(case)?,
         wall_time: run.wall_time,
         steps: run.steps,
         rows: Some(s.rows.len()),
         sha256: Some(crate::fsutil::sha256_hex(&bytes)),
+        profile_sha256: Some(crate::fsutil::sha256_hex(profile.as_bytes())),
         resumed_from: run.resumed_from.clone(),
     };
     write_atomic(
@@ -192,7 +193,7 @@ fn store(dir: &Path, code: &str, case: &ShearCase, run: &CodeRun) -> Result<Seri
     // the run record last: a seed counts as done only with its profile stored
     write_atomic(
         &dir.join(format!("{code}_profile.json")),
-        serde_json::to_string_pretty(&run.profiles)?.as_bytes(),
+        profile.as_bytes(),
     )?;
     write_atomic(
         &dir.join(format!("{code}_run.json")),
@@ -359,6 +360,9 @@ pub struct ShearSummary {
     pub results: Vec<crate::compare::ChannelResult>,
     /// Per-seed steady mu, native - LIGGGHTS (both codes ran every seed).
     pub paired_dmu: Option<crate::compare::Paired>,
+    /// The equivalence test behind `mu_steady` (absent in summaries before 2026-12-04).
+    #[serde(default)]
+    pub mu_equivalence: Option<crate::compare::Equivalence>,
     pub liggghts_version: String,
     pub date_utc: String,
     /// Every seed's series per code, in seed order (in memory only: the CSVs hold them).
@@ -381,8 +385,12 @@ impl ShearSummary {
     pub fn verdict(&self) -> Verdict {
         if self.results.is_empty() {
             Verdict::Done
+        } else if !self.pass {
+            Verdict::Disagree
+        } else if self.results.iter().any(|r| r.inconclusive) {
+            Verdict::Inconclusive
         } else {
-            Verdict::from_pass(self.pass)
+            Verdict::Agree
         }
     }
 }
@@ -393,56 +401,41 @@ impl super::Versioned for ShearSummary {
     }
 }
 
-/// The steady-friction channels of two codes' steady means over the same seeds: `mu_steady`
-/// (|difference| <= `mu_atol` and the 95 % CIs overlap) and, from [`PAIRED_MIN_SEEDS`] seeds
-/// on, `mu_paired` (fails only when the paired mean difference is both significant and larger
-/// than `mu_atol`); with the paired difference itself.
-///
-/// [`PAIRED_MIN_SEEDS`]: crate::compare::PAIRED_MIN_SEEDS
+/// The steady-friction channel `mu_steady` of two codes' steady means over the same seeds: an
+/// equivalence test of the seed-paired difference native - LIGGGHTS against `mu_margin`
+/// ([`crate::compare::equivalence`]: agree when its 90 % CI lies inside the margin, DISAGREE
+/// when it lies wholly beyond, inconclusive otherwise; one seed: the two codes' block CIs).
+/// Returns the channel, the paired difference (95 % CI, for the tables) and the test.
 pub fn mu_results(
     label: &str,
     model: &str,
     l: &Steady,
     n: &Steady,
     window_end: u64,
-    mu_atol: f64,
+    mu_margin: f64,
 ) -> (
     Vec<crate::compare::ChannelResult>,
     Option<crate::compare::Paired>,
+    crate::compare::Equivalence,
 ) {
-    let dmu = (l.mu - n.mu).abs();
-    let overlap = within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95);
-    let mut results = vec![crate::compare::ChannelResult {
+    use crate::compare::{equivalence, equivalence_one_seed, Outcome};
+    let eq = equivalence(&l.per_seed_mu, &n.per_seed_mu, mu_margin)
+        .unwrap_or_else(|| equivalence_one_seed(l.mu, l.mu_ci95, n.mu, n.mu_ci95, mu_margin));
+    let results = vec![crate::compare::ChannelResult {
         case: label.into(),
         model: model.into(),
         channel: "mu_steady".into(),
         unit: "-".into(),
-        max_abs_err: dmu,
-        max_rel_err: dmu / l.mu.abs().max(1e-12),
+        max_abs_err: eq.mean.abs(),
+        max_rel_err: eq.mean.abs() / l.mu.abs().max(1e-12),
         peak: l.mu.abs().max(n.mu.abs()),
         worst_step: window_end,
-        rtol: mu_atol,
-        pass: dmu <= mu_atol && overlap,
+        rtol: mu_margin,
+        pass: eq.outcome != Outcome::Disagree,
+        inconclusive: eq.outcome == Outcome::Inconclusive,
     }];
     let paired_dmu = crate::compare::paired(&l.per_seed_mu, &n.per_seed_mu);
-    if let Some(p) = paired_dmu
-        .as_ref()
-        .filter(|p| p.n >= crate::compare::PAIRED_MIN_SEEDS)
-    {
-        results.push(crate::compare::ChannelResult {
-            case: label.into(),
-            model: model.into(),
-            channel: "mu_paired".into(),
-            unit: "-".into(),
-            max_abs_err: p.mean.abs(),
-            max_rel_err: p.mean.abs() / p.ci95,
-            peak: n.mu.abs(),
-            worst_step: window_end,
-            rtol: mu_atol,
-            pass: crate::compare::paired_agrees(p, mu_atol),
-        });
-    }
-    (results, paired_dmu)
+    (results, paired_dmu, eq)
 }
 
 /// Runs every seed of a shear case in the codes asked for (reusing stored per-seed results),
@@ -481,8 +474,12 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
             }
         };
     }
-    if !(a.mu_atol.is_finite() && a.mu_atol > 0.0 && a.mu_atol < 1.0) {
-        return Err(Error::invalid("--mu-atol", a.mu_atol, "a number in (0, 1)"));
+    if !(a.mu_margin.is_finite() && a.mu_margin > 0.0 && a.mu_margin < 1.0) {
+        return Err(Error::invalid(
+            "--mu-margin",
+            a.mu_margin,
+            "a number in (0, 1)",
+        ));
     }
     if !(a.stress_rtol.is_finite() && a.stress_rtol > 0.0 && a.stress_rtol < 1.0) {
         return Err(Error::invalid(
@@ -500,15 +497,16 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         None
     };
     let out = a.out.clone();
+    // one owner per output folder, held to the end of the run (two runs into one --out
+    // would overwrite each other's seeds and summary)
+    let _lock = crate::fsutil::DirLock::acquire(&out, "--out")?;
     let cores = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(1);
     let threads = a
         .threads
         .unwrap_or(if run_lig { (cores - 1).max(1) } else { cores });
-    if threads == 0 {
-        return Err(Error::invalid("--threads", 0, ">= 1"));
-    }
+    super::check_threads("--threads", threads)?;
     let inertial: Vec<f64> = (0..case0.stages.len())
         .map(|k| case0.inertial_number(k))
         .collect();
@@ -705,16 +703,17 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                 worst_step: window.1,
                 rtol: a.stress_rtol,
                 pass: worst <= a.stress_rtol,
+                inconclusive: false,
             });
         }
     }
-    let paired_dmu = match (&ls, &ns) {
+    let (paired_dmu, mu_equivalence) = match (&ls, &ns) {
         (Some(l), Some(n)) => {
-            let (r, p) = mu_results(&label, &model, l, n, window.1, a.mu_atol);
+            let (r, p, eq) = mu_results(&label, &model, l, n, window.1, a.mu_margin);
             results.extend(r);
-            p
+            (p, Some(eq))
         }
-        _ => None,
+        _ => (None, None),
     };
     let profiles = CodeProfiles {
         liggghts: CodeProfiles::mean(
@@ -750,6 +749,9 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         ] {
             let d = (a - b).abs();
             let ratio = d / (a_ci + b_ci);
+            // a slip is a fraction of the plate speed: with CIs summing past 1 (the whole
+            // range) the data say nothing either way
+            let undecided = (a_ci + b_ci).is_nan() || a_ci + b_ci > 1.0;
             results.push(crate::compare::ChannelResult {
                 case: label.clone(),
                 model: model.clone(),
@@ -760,7 +762,8 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                 peak: 1.0,
                 worst_step: window.1,
                 rtol: crate::profile::SLIP_CI_LIMIT,
-                pass: ratio <= crate::profile::SLIP_CI_LIMIT,
+                pass: undecided || ratio <= crate::profile::SLIP_CI_LIMIT,
+                inconclusive: undecided,
             });
         }
     }
@@ -786,6 +789,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         seeds,
         results,
         paired_dmu,
+        mu_equivalence,
         liggghts_version: lig
             .as_ref()
             .map(|l| l.version())
@@ -843,15 +847,29 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
         ("native", &summary.profiles.native),
     ] {
         for p in profiles {
+            // a slip is a fraction of the plate speed: a CI wider than that range is no figure
+            let slip = |v: f64, ci: f64| {
+                if ci <= 1.0 {
+                    format!("{:.1} +- {:.1} %", 100.0 * v, 100.0 * ci)
+                } else {
+                    format!(
+                        "not resolved (95 % CI +-{:.0} % of the plate speed)",
+                        100.0 * ci
+                    )
+                }
+            };
+            let band = if p.slip_bottom_ci95 <= 1.0 && p.slip_top_ci95 <= 1.0 {
+                format!("{:.2} mm", 1e3 * p.band_width)
+            } else {
+                "not resolved".to_string()
+            };
             say!(
-                "  {code:<8} stage {} ({} m/s): slip at the bottom plate {:.1} +- {:.1} %, at the top plate {:.1} +- {:.1} %, shear band {:.2} mm of a {:.2} mm gap ({} layers)",
+                "  {code:<8} stage {} ({} m/s): slip at the bottom plate {}, at the top plate {}, shear band {} of a {:.2} mm gap ({} layers)",
                 p.stage + 1,
                 p.speed,
-                100.0 * p.slip_bottom,
-                100.0 * p.slip_bottom_ci95,
-                100.0 * p.slip_top,
-                100.0 * p.slip_top_ci95,
-                1e3 * p.band_width,
+                slip(p.slip_bottom, p.slip_bottom_ci95),
+                slip(p.slip_top, p.slip_top_ci95),
+                band,
                 1e3 * p.gap,
                 p.layers.len()
             );
@@ -868,23 +886,31 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
             p.n
         );
     }
+    if let Some(e) = &summary.mu_equivalence {
+        for line in crate::calibration::describe(e, summary.preset) {
+            say!("  {line}");
+        }
+    }
     for r in &summary.results {
         say!(
             "  {:<22} {:>10.4e} (limit {:.2e} {})  {}",
             r.channel,
-            if r.channel == "mu_steady" || r.channel == "mu_paired" {
+            if r.channel == "mu_steady" {
                 r.max_abs_err
             } else {
                 r.max_rel_err
             },
             r.rtol,
             match r.channel.as_str() {
-                "mu_steady" => "abs, CIs must overlap",
-                "mu_paired" => "abs, fails only if its 95 % CI also excludes 0",
+                "mu_steady" => "abs, equivalence margin of the paired mean",
                 "slip_bottom" | "slip_top" => "x the CIs summed",
                 _ => "rel",
             },
-            if r.pass { "ok" } else { "FAIL" }
+            match (r.pass, r.inconclusive) {
+                (false, _) => "FAIL",
+                (true, true) => "inconclusive",
+                (true, false) => "ok",
+            }
         );
     }
     say!(

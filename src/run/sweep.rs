@@ -102,7 +102,7 @@ impl Manifest {
                 let index = runs.len();
                 let mut r = RunSpec {
                     index,
-                    id: format!("mur{m}_etar{e}_s{seed}"),
+                    id: Self::run_id(m, e, seed),
                     mu_r: m,
                     eta_r: e,
                     seed,
@@ -129,6 +129,11 @@ impl Manifest {
         })
     }
 
+    /// The id (and folder name under `runs/`) of a run.
+    fn run_id(mu_r: f64, eta_r: f64, seed: u64) -> String {
+        format!("mur{mu_r}_etar{eta_r}_s{seed}")
+    }
+
     /// Whether this manifest can replace `old` in the same directory: the same shared settings,
     /// and every run id in both with the same inputs (more seeds or points may be added).
     pub fn compatible_with(&self, old: &Manifest) -> bool {
@@ -150,6 +155,18 @@ impl Manifest {
             })?;
         if m.schema != 1 {
             return Err(Error::invalid("manifest schema", m.schema, "1"));
+        }
+        // a manifest travels between machines (SLURM): its ids become folder names, so each
+        // must be the one its point and seed give (never a path out of the sweep's folder)
+        for (k, r) in m.runs.iter().enumerate() {
+            let want = Self::run_id(r.mu_r, r.eta_r, r.seed);
+            if r.index != k || r.id != want {
+                return Err(Error::invalid(
+                    format!("{}: runs[{k}]", path.display()),
+                    format!("index {} id {:?}", r.index, r.id),
+                    format!("index {k} and id {want:?} (what its mu_r, eta_r and seed give; plan the sweep again)"),
+                ));
+            }
         }
         Ok(m)
     }
@@ -541,8 +558,7 @@ pub fn run_pending(
         .map(|n| n.get())
         .unwrap_or(1);
     let threads = match p.threads {
-        Some(0) => return Err(Error::invalid("--threads", 0, ">= 1")),
-        Some(t) => t,
+        Some(t) => super::check_threads("--threads", t)?,
         None if p.jobs == 1 && m.base.engine == Engine::Native => cores,
         None => 1,
     };

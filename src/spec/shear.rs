@@ -6,6 +6,19 @@ use super::{check_identifier, non_negative, positive, Material, Models, RollingM
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
+/// Most particles a shear box (and `verify bench`'s state) may hold: about 2.5 GB of solver
+/// state, within the 24 GiB machines this runs on, and 4x the size the MPI issue aims at.
+pub const MAX_PARTICLES: usize = 10_000_000;
+
+/// The one rule for a particle count (case files, `--particles`, `verify bench`).
+pub fn check_particles(field: &str, n: usize) -> Result<()> {
+    if (10..=MAX_PARTICLES).contains(&n) {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, n, format!("10 ..= {MAX_PARTICLES}")))
+    }
+}
+
 /// The built-in shear presets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -77,6 +90,10 @@ pub struct Overrides {
     pub snapshot_every: u64,
     /// Normal restitution (0.05 < e <= 1).
     pub restitution: Option<f64>,
+    /// Sliding friction coefficient mu_p (the paper's 0.5); a sensitivity study's knob and the
+    /// calibration's known error (docs/verdicts.md). Absent in requests before 2026-12-04.
+    #[serde(default)]
+    pub friction: Option<f64>,
     /// Flat plates instead of teeth.
     pub flat_plates: bool,
     pub tooth_height: Option<f64>,
@@ -361,7 +378,27 @@ impl ShearCase {
         if let Some(e) = o.restitution {
             c = c.with_restitution("--restitution", e)?;
         }
+        if let Some(mu) = o.friction {
+            if !(mu.is_finite() && mu > 0.0 && mu <= 10.0) {
+                return Err(Error::invalid("--friction", mu, "a number in (0, 10]"));
+            }
+            c.material.friction = mu;
+            c.name = format!("{}_mup{mu}", c.name).replace('.', "p");
+        }
         if o.flat_plates {
+            // a tooth size with flat plates would be silently dropped
+            for (field, v) in [
+                ("--tooth-height", o.tooth_height),
+                ("--tooth-wavelength", o.tooth_wavelength),
+            ] {
+                if let Some(v) = v {
+                    return Err(Error::invalid(
+                        field,
+                        v,
+                        "no value with --flat-plates (flat plates have no teeth)",
+                    ));
+                }
+            }
             c.plates = Plates::Flat;
         } else if let Plates::Teeth {
             tooth_height,
@@ -376,9 +413,7 @@ impl ShearCase {
             }
         }
         if let Some(n) = o.particles {
-            if n < 10 {
-                return Err(Error::invalid("--particles", n, ">= 10"));
-            }
+            check_particles("--particles", n)?;
             // same area per particle (so the same height); box_x a whole number of teeth
             let area = c.box_x * c.box_z * n as f64 / c.particles as f64;
             let scale = (n as f64 / c.particles as f64).sqrt();
@@ -520,13 +555,7 @@ impl ShearCase {
             return Err(Error::invalid("version", self.version, "1"));
         }
         check_identifier("name", &self.name)?;
-        if self.particles < 10 || self.particles > 10_000_000 {
-            return Err(Error::invalid(
-                "particles",
-                self.particles,
-                "10 ..= 10000000",
-            ));
-        }
+        check_particles("particles", self.particles)?;
         if self.radii.is_empty() || self.radii.len() != self.percentages.len() {
             return Err(Error::invalid(
                 "radii",

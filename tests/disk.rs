@@ -1,0 +1,358 @@
+//! Nothing on disk is trusted unchecked (issue #36): a corrupted checkpoint is refused and
+//! the run starts over to the uninterrupted run's bits; two runs never share an output folder.
+
+mod common;
+
+use common::{text, verify};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+fn native_ci(out: &Path) -> Vec<String> {
+    [
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--native-only",
+        "--checkpoint-every",
+        "0",
+        "--threads",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn run(args: &[String]) -> std::process::Output {
+    verify(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// Starts the run and SIGKILLs it once its checkpoint exists.
+fn killed_after_checkpoint(out: &Path) {
+    let mut child = std::process::Command::new(common::verify_bin())
+        .args(native_ci(out))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let cp = out.join("seed1/native_checkpoint.bin");
+    let t0 = Instant::now();
+    while !cp.exists() {
+        assert!(t0.elapsed().as_secs() < 120, "no checkpoint written");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(
+        !out.join("seed1/native.csv").exists(),
+        "the run ended before it was killed: the test killed nothing"
+    );
+}
+
+#[test]
+fn a_corrupted_checkpoint_is_refused_and_the_run_starts_over() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole = dir.path().join("whole");
+    let o = run(&native_ci(&whole));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    // one flipped bit in the middle of the payload, then one in the header's case hash
+    for (k, corrupt) in [
+        (|b: &mut Vec<u8>| {
+            let n = b.len();
+            b[n / 2] ^= 0x10;
+        }) as fn(&mut Vec<u8>),
+        |b: &mut Vec<u8>| {
+            let at = b.windows(13).position(|w| w == b"input_sha256\"").unwrap() + 16;
+            b[at] = if b[at] == b'0' { b'1' } else { b'0' };
+        },
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let cut = dir.path().join(format!("cut{k}"));
+        killed_after_checkpoint(&cut);
+        let cp = cut.join("seed1/native_checkpoint.bin");
+        let mut bytes = std::fs::read(&cp).unwrap();
+        corrupt(&mut bytes);
+        std::fs::write(&cp, &bytes).unwrap();
+        let o = run(&native_ci(&cut));
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(0), "{t}");
+        assert!(
+            t.contains("is not resumed") && !t.contains("resumed from checkpoint at step"),
+            "{t}"
+        );
+        assert!(
+            t.contains(if k == 0 { "checksum" } else { "another case" }),
+            "{t}"
+        );
+        assert!(cut.join("seed1/native_checkpoint.rejected").is_file());
+        assert_eq!(
+            std::fs::read(whole.join("seed1/native.csv")).unwrap(),
+            std::fs::read(cut.join("seed1/native.csv")).unwrap(),
+            "the run that started over differs from the uninterrupted one"
+        );
+    }
+}
+
+#[test]
+fn a_second_run_into_a_busy_folder_is_refused_and_the_first_finishes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut first = std::process::Command::new(common::verify_bin())
+        .args(native_ci(&out))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !out.join("seed1/case.toml").exists() {
+        assert!(t0.elapsed().as_secs() < 60, "the first run did not start");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let mut second = native_ci(&out);
+    second.extend(["--mu-r", "0.5"].map(String::from));
+    let o = run(&second);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(
+        t.contains("--out") && t.contains(&format!("pid {}", first.id())),
+        "{t}"
+    );
+    assert!(first.wait().unwrap().success());
+    // the folder holds the first run's case, and is free again
+    let case = std::fs::read_to_string(out.join("seed1/case.toml")).unwrap();
+    assert!(case.contains("rolling_friction = 0.0"), "{case}");
+    let o = run(&native_ci(&out));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+}
+
+#[test]
+fn a_manifest_whose_run_id_leaves_its_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = dir.path().join("sweep");
+    let o = verify(&[
+        "sweep",
+        "--preset",
+        "ci",
+        "--points",
+        "0:0",
+        "--seeds",
+        "1",
+        "--emit",
+        "slurm",
+        "--out",
+        sweep.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    let mpath = sweep.join("manifest.json");
+    let good = std::fs::read_to_string(&mpath).unwrap();
+    assert!(good.contains("\"mur0_etar0_s1\""), "{good}");
+    let outside = dir.path().join("x");
+    for bad in ["../../x", outside.to_str().unwrap(), "mur0_etar0_s2"] {
+        std::fs::write(
+            &mpath,
+            good.replace("\"mur0_etar0_s1\"", &format!("{bad:?}")),
+        )
+        .unwrap();
+        let o = verify(&[
+            "sweep",
+            "run-one",
+            "--manifest",
+            mpath.to_str().unwrap(),
+            "--index",
+            "0",
+        ]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {t}");
+        assert!(t.contains("runs[0]") && t.contains("mur0_etar0_s1"), "{t}");
+        assert!(!outside.exists() && !dir.path().join("x").exists());
+    }
+}
+
+/// Processes whose working directory lies under `dir` (LIGGGHTS runs in the seed's folder).
+fn processes_under(dir: &Path) -> Vec<String> {
+    let Ok(dir) = dir.canonicalize() else {
+        return Vec::new();
+    };
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name().to_string_lossy().parse::<u32>().is_ok())
+        .filter(|e| std::fs::read_link(e.path().join("cwd")).is_ok_and(|c| c.starts_with(&dir)))
+        .map(|e| {
+            std::fs::read_to_string(e.path().join("cmdline"))
+                .unwrap_or_default()
+                .replace('\0', " ")
+        })
+        .collect()
+}
+
+#[test]
+fn sigterm_ends_liggghts_with_verify_and_a_rerun_resumes() {
+    let _ = common::liggghts();
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lt");
+    let args = [
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--liggghts-only",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let mut child = std::process::Command::new(common::verify_bin())
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while processes_under(&out).is_empty() {
+        assert!(t0.elapsed().as_secs() < 60, "LIGGGHTS did not start");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // SIGTERM, as SLURM and systemd send it
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGTERM);
+    }
+    child.wait().unwrap();
+    let t1 = Instant::now();
+    while !processes_under(&out).is_empty() {
+        assert!(
+            t1.elapsed().as_secs() < 10,
+            "still running after SIGTERM: {:?}",
+            processes_under(&out)
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let o = verify(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    assert!(out.join("seed1/liggghts.csv").is_file());
+    let temps: Vec<_> = walk(&out)
+        .into_iter()
+        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with(".tmp"))
+        .collect();
+    assert!(temps.is_empty(), "{temps:?}");
+}
+
+fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            v.extend(walk(&p));
+        } else {
+            v.push(p);
+        }
+    }
+    v
+}
+
+/// Inputs that used to be changed silently, or to exhaust the machine, are refused naming the
+/// field and its valid range (exit 2, before any run starts).
+#[test]
+fn silently_changed_and_unbounded_inputs_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o = out.to_str().unwrap();
+    for (args, field, valid) in [
+        (
+            vec![
+                "shear",
+                "--preset",
+                "ci",
+                "--flat-plates",
+                "--tooth-height",
+                "1e-4",
+                "--out",
+                o,
+            ],
+            "--tooth-height",
+            "--flat-plates",
+        ),
+        (
+            vec![
+                "convergence",
+                "--preset",
+                "ci",
+                "--dt-factors",
+                "1,1",
+                "--out",
+                o,
+            ],
+            "--dt-factors",
+            "distinct",
+        ),
+        (
+            vec![
+                "shear",
+                "--preset",
+                "ci",
+                "--native-only",
+                "--threads",
+                "10000",
+                "--out",
+                o,
+            ],
+            "--threads",
+            "1 ..=",
+        ),
+        (
+            vec!["bench", "--particles", "0", "--out", o],
+            "--particles",
+            "10 ..= 10000000",
+        ),
+        (
+            vec!["bench", "--particles", "1000000000", "--out", o],
+            "--particles",
+            "10 ..= 10000000",
+        ),
+        (
+            vec!["bench", "--threads", "1000", "--out", o],
+            "--threads",
+            "1 ..=",
+        ),
+    ] {
+        let r = verify(&args);
+        let t = text(&r);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {t}");
+        assert!(t.contains(field) && t.contains(valid), "{args:?}: {t}");
+        assert!(!out.join("seed1").exists(), "{args:?} started a run");
+    }
+}
+
+/// A finished seed is reused only when every file it is rebuilt from checks against its
+/// record: an edited profile (or series) makes the seed run again, back to the true bits.
+#[test]
+fn an_edited_stored_seed_is_run_again_not_reused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o = run(&native_ci(&out));
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+    for file in ["native_profile.json", "native.csv"] {
+        let path = out.join("seed1").join(file);
+        let good = std::fs::read(&path).unwrap();
+        // one digit changed, the file still parses
+        let mut bad = good.clone();
+        let at = bad
+            .iter()
+            .rposition(|b| b.is_ascii_digit() && *b != b'9')
+            .unwrap();
+        bad[at] += 1;
+        std::fs::write(&path, &bad).unwrap();
+        let o = run(&native_ci(&out));
+        assert_eq!(o.status.code(), Some(0), "{}", text(&o));
+        assert_eq!(
+            std::fs::read(&path).unwrap(),
+            good,
+            "{file}: the edit was reused"
+        );
+    }
+}
