@@ -42,6 +42,8 @@ pub enum Error {
         tail: String,
     },
     /// A LIGGGHTS output file that could not be parsed.
+    #[error("study file {path} is not valid TOML: {msg}")]
+    StudyFile { path: PathBuf, msg: String },
     #[error("cannot parse LIGGGHTS output {path}: {msg}")]
     Parse { path: PathBuf, msg: String },
     /// The native solver reached a non-finite or unsupported state.

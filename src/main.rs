@@ -30,7 +30,38 @@ fn main() -> ExitCode {
     }
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
-    let matches = Cli::command().get_matches();
+    let matches = match Cli::command().try_get_matches() {
+        Ok(m) => m,
+        Err(e) => {
+            // --json promises one document on stdout, a refusal at the parser included
+            let wants_json = std::env::args().any(|a| a == "--json");
+            let refusal = !matches!(
+                e.kind(),
+                clap::error::ErrorKind::DisplayHelp
+                    | clap::error::ErrorKind::DisplayVersion
+                    | clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            );
+            if wants_json && refusal {
+                let text = e.render().to_string();
+                eprint!("{text}");
+                let first = text
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+                    .trim_start_matches("error: ");
+                let doc = serde_json::json!({
+                    "verdict": "error",
+                    "exit_code": 2,
+                    "error": first,
+                    "summary_file": null,
+                    "summary": null,
+                });
+                println!("{doc}");
+                return ExitCode::from(2);
+            }
+            e.exit()
+        }
+    };
     // --json: stdout holds one JSON document; every line the command prints goes to stderr
     // (file descriptor 1 pointed at stderr, the real stdout kept for the document)
     let json_out = matches.get_flag("json").then(|| {

@@ -8,22 +8,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 fn native_ci(out: &Path) -> Vec<String> {
-    [
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--native-only",
-        "--checkpoint-every",
-        "0",
-        "--threads",
-        "1",
-        "--out",
-        out.to_str().unwrap(),
-    ]
-    .map(String::from)
-    .to_vec()
+    common::native_ci_checkpointed(out, "1")
 }
 
 fn run(args: &[String]) -> std::process::Output {
@@ -354,5 +339,70 @@ fn an_edited_stored_seed_is_run_again_not_reused() {
             good,
             "{file}: the edit was reused"
         );
+    }
+}
+
+/// A study's `--dry-run` refuses what the run refuses; a boolean is no value of a valued
+/// option (it was dropped, and the default ran); a TOML error is named as one.
+#[test]
+fn study_files_are_checked_as_the_run_checks_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("s.toml");
+    for (line, field, valid) in [
+        ("seeds = 0", "--seeds", "1 ..= 1000"),
+        (
+            "first_seed = 0",
+            "--first-seed",
+            "1 ..= 9223372036854775807",
+        ),
+        ("threads = 0", "--threads", "1 ..="),
+        ("seeds = false", "[options] seeds", "only for flags"),
+        ("mu_r = false", "[options] mu_r", "only for flags"),
+    ] {
+        std::fs::write(
+            &study,
+            format!("version = 1\ncommand = \"shear\"\n[options]\npreset = \"ci\"\n{line}\n"),
+        )
+        .unwrap();
+        let o = verify(&["run", study.to_str().unwrap(), "--dry-run"]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{line}: {t}");
+        assert!(t.contains(field) && t.contains(valid), "{line}: {t}");
+    }
+    std::fs::write(&study, "version = 1\ncommand = \"shear\"\n[options\n").unwrap();
+    let o = verify(&["run", study.to_str().unwrap()]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(
+        t.contains("is not valid TOML") && !t.contains("LIGGGHTS"),
+        "{t}"
+    );
+}
+
+/// `--json` prints its one document on stdout for a refusal at the parser too.
+#[test]
+fn json_prints_its_document_for_a_refusal_at_the_parser() {
+    for args in [
+        vec!["shear", "--bogus", "--json"],
+        vec!["shear", "--json", "--preset", "nope"],
+    ] {
+        let o = verify(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let doc: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+            panic!(
+                "{args:?}: stdout is not one JSON document ({e}): {}",
+                text(&o)
+            )
+        });
+        assert_eq!(doc["verdict"], "error");
+        assert_eq!(doc["exit_code"], 2);
+        assert!(doc["error"]
+            .as_str()
+            .unwrap()
+            .contains(if args[1] == "--bogus" {
+                "--bogus"
+            } else {
+                "nope"
+            }));
     }
 }

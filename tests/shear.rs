@@ -288,24 +288,7 @@ fn failing_liggghts_keeps_partial_outputs_and_shows_the_log() {
 #[test]
 fn a_native_run_killed_at_a_random_step_resumes_to_identical_results() {
     let dir = tempfile::tempdir().unwrap();
-    let args = |out: &Path, threads: &str| -> Vec<String> {
-        [
-            "shear",
-            "--preset",
-            "ci",
-            "--seeds",
-            "1",
-            "--native-only",
-            "--checkpoint-every",
-            "0",
-            "--threads",
-            threads,
-            "--out",
-            out.to_str().unwrap(),
-        ]
-        .map(String::from)
-        .to_vec()
-    };
+    let args = common::native_ci_checkpointed;
     // the uninterrupted run
     let whole = dir.path().join("whole");
     let o = verify(

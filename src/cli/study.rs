@@ -130,7 +130,7 @@ fn scalar(key: &str, v: &toml::Value) -> Result<String> {
 /// (which replace the study's fields of the same names).
 pub fn study_args(path: &Path, overrides: &[String]) -> Result<Vec<String>> {
     let text = crate::fsutil::read_to_string(path)?;
-    let doc: toml::Table = toml::from_str(&text).map_err(|e| Error::Parse {
+    let doc: toml::Table = toml::from_str(&text).map_err(|e| Error::StudyFile {
         path: path.to_path_buf(),
         msg: e.to_string(),
     })?;
@@ -189,8 +189,23 @@ pub fn study_args(path: &Path, overrides: &[String]) -> Result<Vec<String>> {
         .filter_map(|o| o.strip_prefix("--"))
         .map(|o| o.split('=').next().unwrap_or(o).replace('-', "_"))
         .collect();
+    // options that take no value (flags): the only ones a boolean may set
+    let flags: Vec<String> = cmd
+        .get_arguments()
+        .filter(|a| !a.get_action().takes_values())
+        .filter_map(|a| a.get_long())
+        .map(|l| l.replace('-', "_"))
+        .collect();
     let mut args = vec![command.clone()];
     for (key, v) in options {
+        if matches!(v, toml::Value::Boolean(_)) && !flags.contains(key) {
+            // `seeds = false` would otherwise be dropped and the default run
+            return Err(Error::invalid(
+                format!("[options] {key}"),
+                v,
+                "a value of the option (true/false only for flags)",
+            ));
+        }
         if !valid.contains(key) {
             return Err(Error::invalid(
                 format!("[options] {key}"),
@@ -304,6 +319,7 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
     Ok(match &cli.command {
         Command::Shear(a) => {
             let req = a.request(a.engine(), "shear");
+            req.validate()?;
             let mut runs = Vec::new();
             for s in req.seed_range() {
                 let (c, _) = req.seed_case(s)?;
@@ -315,6 +331,7 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
         }
         Command::Convergence(a) => {
             let req = a.case.request(a.engine.into(), "convergence");
+            req.validate()?;
             let mut runs = Vec::new();
             for s in req.seed_range() {
                 let (c, _) = req.seed_case(s)?;

@@ -75,7 +75,43 @@ impl ShearRequest {
     pub fn seed_range(&self) -> std::ops::Range<u64> {
         self.case.seed..self.case.seed + self.seeds
     }
+
+    /// The request's own fields, checked as the run checks them (the run, the sweep and a
+    /// study's `--dry-run` plan call this one rule).
+    pub fn validate(&self) -> Result<()> {
+        if self.seeds == 0 || self.seeds > 1000 {
+            return Err(Error::invalid("--seeds", self.seeds, "1 ..= 1000"));
+        }
+        if self.case.seed == 0 || self.case.seed > MAX_FIRST_SEED {
+            return Err(Error::invalid(
+                "--first-seed",
+                self.case.seed,
+                format!("1 ..= {MAX_FIRST_SEED}"),
+            ));
+        }
+        if let Some(t) = self.threads {
+            super::check_threads("--threads", t)?;
+        }
+        if !(self.mu_margin.is_finite() && self.mu_margin > 0.0 && self.mu_margin < 1.0) {
+            return Err(Error::invalid(
+                "--mu-margin",
+                self.mu_margin,
+                "a number in (0, 1)",
+            ));
+        }
+        if !(self.stress_rtol.is_finite() && self.stress_rtol > 0.0 && self.stress_rtol < 1.0) {
+            return Err(Error::invalid(
+                "--stress-rtol",
+                self.stress_rtol,
+                "a number in (0, 1)",
+            ));
+        }
+        Ok(())
+    }
 }
+
+/// Largest first seed: seeds and their sums stay far from u64 overflow.
+pub const MAX_FIRST_SEED: u64 = u64::MAX / 2;
 
 /// The validated case of one seed run by `engine`: [`ShearCase::build`], and the check that a
 /// native-only rolling model is not asked of LIGGGHTS.
@@ -442,12 +478,7 @@ pub fn mu_results(
 /// compares them, writes plots and `summary.json` into the output directory, and returns the
 /// summary.
 pub fn run(a: &ShearRequest) -> Result<ShearSummary> {
-    if a.seeds == 0 || a.seeds > 1000 {
-        return Err(Error::invalid("--seeds", a.seeds, "1 ..= 1000"));
-    }
-    if a.case.seed == 0 || a.case.seed > u64::MAX / 2 {
-        return Err(Error::invalid("--first-seed", a.case.seed, ">= 1"));
-    }
+    a.validate()?;
     let cases: Vec<(ShearCase, Vec<String>)> = a
         .seed_range()
         .map(|s| a.seed_case(s))
@@ -474,20 +505,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
             }
         };
     }
-    if !(a.mu_margin.is_finite() && a.mu_margin > 0.0 && a.mu_margin < 1.0) {
-        return Err(Error::invalid(
-            "--mu-margin",
-            a.mu_margin,
-            "a number in (0, 1)",
-        ));
-    }
-    if !(a.stress_rtol.is_finite() && a.stress_rtol > 0.0 && a.stress_rtol < 1.0) {
-        return Err(Error::invalid(
-            "--stress-rtol",
-            a.stress_rtol,
-            "a number in (0, 1)",
-        ));
-    }
+    a.validate()?;
     let case0 = &cases[0].0;
     let run_lig = a.engine.runs_liggghts();
     let run_nat = a.engine.runs_native();

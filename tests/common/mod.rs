@@ -53,6 +53,27 @@ pub fn short_ci_shear(out: &std::path::Path, extra: &[&str]) -> std::process::Ou
     verify(&args)
 }
 
+/// The arguments of a native-only ci shear of one seed with a checkpoint at every output
+/// step (what the checkpoint and resume tests kill and rerun), on `threads` threads.
+pub fn native_ci_checkpointed(out: &std::path::Path, threads: &str) -> Vec<String> {
+    [
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--native-only",
+        "--checkpoint-every",
+        "0",
+        "--threads",
+        threads,
+        "--out",
+        out.to_str().expect("a UTF-8 path"),
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
 /// `verify contact --case rolling_unload --reference` (no LIGGGHTS needed) into `out`, with
 /// `extra` flags.
 pub fn reference_contact(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
