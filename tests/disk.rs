@@ -304,6 +304,29 @@ fn silently_changed_and_unbounded_inputs_are_refused_by_name() {
             "--threads",
             "1 ..=",
         ),
+        (
+            vec!["shear", "--preset", "ci", "--eta-r", "1e300", "--out", o],
+            "--eta-r",
+            "0 ..= 10",
+        ),
+        (
+            vec!["shear", "--preset", "ci", "--mu-r", "1e300", "--out", o],
+            "--mu-r",
+            "0 ..= 10",
+        ),
+        (
+            vec![
+                "shear",
+                "--preset",
+                "ci",
+                "--snapshot-every",
+                "18446744073709551615",
+                "--out",
+                o,
+            ],
+            "--snapshot-every",
+            "the run's steps",
+        ),
     ] {
         let r = verify(&args);
         let t = text(&r);

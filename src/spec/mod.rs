@@ -214,19 +214,9 @@ impl Material {
                 "0.05 < e <= 1 (LIGGGHTS' range)",
             ));
         }
-        non_negative("material.friction", m.friction)?;
-        non_negative(&rf, m.rolling_friction)?;
-        // coefficients far beyond any granular material: the rolling stiffness grows as
-        // mu_r^2, and mu_r = 1e9 blows a run up within steps
-        for (f, v) in [
-            ("material.friction", m.friction),
-            (rf.as_str(), m.rolling_friction),
-        ] {
-            if v > MAX_FRICTION {
-                return Err(Error::invalid(f, v, format!("0 ..= {MAX_FRICTION}")));
-            }
-        }
-        non_negative(&rd, m.rolling_damping)?;
+        check_coefficient("material.friction", m.friction)?;
+        check_coefficient(&rf, m.rolling_friction)?;
+        check_coefficient(&rd, m.rolling_damping)?;
         finite("material.rolling_stiffness", m.rolling_stiffness)?;
         if m.rolling_stiffness < 1.0 {
             return Err(Error::invalid(
@@ -669,6 +659,18 @@ pub(crate) fn positive(field: &str, v: f64) -> Result<()> {
         Err(Error::invalid(field, v, "a finite number > 0"))
     }
 }
+/// The one rule for a friction, rolling friction or rolling damping coefficient: finite, in
+/// 0 ..= [`MAX_FRICTION`] (far beyond any granular material: the rolling stiffness grows as
+/// mu_r^2, and mu_r = 1e9 blows a run up within steps; eta_r is a fraction of critical
+/// damping).
+pub fn check_coefficient(field: &str, v: f64) -> Result<()> {
+    if v.is_finite() && (0.0..=MAX_FRICTION).contains(&v) {
+        Ok(())
+    } else {
+        Err(Error::invalid(field, v, format!("0 ..= {MAX_FRICTION}")))
+    }
+}
+
 pub(crate) fn non_negative(field: &str, v: f64) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
         Ok(())

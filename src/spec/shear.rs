@@ -350,10 +350,9 @@ impl ShearCase {
     /// each applied here and nowhere else (the dt factor through [`ShearCase::scale_dt`]).
     /// Returns the case and its warnings.
     pub fn build(r: &CaseRequest) -> Result<(Self, Vec<String>)> {
+        // before the case's name is made of them
         for (flag, v) in [("--mu-r", r.mu_r), ("--eta-r", r.eta_r)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(flag, v, "a finite number >= 0"));
-            }
+            crate::spec::check_coefficient(flag, v)?;
         }
         if r.rolling == RollingModel::Off && r.mu_r > 0.0 {
             return Err(Error::invalid("--mu-r", r.mu_r, "0 with --rolling off"));
@@ -373,6 +372,16 @@ impl ShearCase {
         }
         let o = &r.overrides;
         if o.snapshot_every > 0 {
+            // more than the run's steps would never write one (and cannot be stored in a
+            // case file: TOML integers are i64)
+            let total = c.total_steps();
+            if o.snapshot_every > total {
+                return Err(Error::invalid(
+                    "--snapshot-every",
+                    o.snapshot_every,
+                    format!("0 ..= {total} (the run's steps; 0: the preset's choice)"),
+                ));
+            }
             c.snapshot_every = o.snapshot_every;
         }
         if let Some(e) = o.restitution {
