@@ -429,3 +429,39 @@ fn json_prints_its_document_for_a_refusal_at_the_parser() {
             }));
     }
 }
+
+/// `verify convergence --help` does not offer the shear flags it always refuses.
+#[test]
+fn convergence_help_lists_only_what_it_accepts() {
+    let o = verify(&["convergence", "--help"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("--engine") && t.contains("--dt-factors"), "{t}");
+    assert!(
+        !t.contains("--native-only") && !t.contains("--liggghts-only"),
+        "{t}"
+    );
+}
+
+/// A replay window start near u64::MAX is refused by its range, not wrapped past the check
+/// into a LIGGGHTS run.
+#[test]
+fn a_replay_start_beyond_the_run_is_refused_by_its_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    for at in ["18446744073709551615", "18446744073709551600"] {
+        let o = verify(&[
+            "replay",
+            "--preset",
+            "ci",
+            "--at",
+            at,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{t}");
+        assert!(t.contains("--at") && t.contains("1 ..="), "{t}");
+        assert!(!out.join("liggghts").exists(), "LIGGGHTS ran: {t}");
+    }
+}

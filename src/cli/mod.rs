@@ -158,6 +158,8 @@ pub enum Command {
         verify convergence --mu-r 1 --eta-r 0.5 --preset ci --dt-factors 1,0.5,0.25\n  \
         verify convergence --mu-r 1 --eta-r 0.5 --engine both --liggghts-dt-factors 1,0.5 --with-implicit\n\n\
         Exit status: 0 converged, 1 not converged, 2 error.")]
+    // the shear flags that choose the codes are --engine here (given, they are refused)
+    #[command(mut_arg("native_only", |a| a.hide(true)), mut_arg("liggghts_only", |a| a.hide(true)))]
     Convergence(convergence::ConvergenceArgs),
     /// Every contact case and the nightly shear cases in both codes: report.html, summary.json,
     /// history.

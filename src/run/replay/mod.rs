@@ -121,7 +121,7 @@ pub fn default_states(case: &ShearCase, n: usize, k: u64, shear_span: u64) -> Ve
 
 /// Checks the window starts: increasing, disjoint, inside the run, not at a run boundary.
 pub fn check_states(case: &ShearCase, states: &[u64], k: u64) -> Result<()> {
-    let k = k + REPLAY_NEIGHBOR_EVERY;
+    let k = k.saturating_add(REPLAY_NEIGHBOR_EVERY);
     let ends = case.run_ends();
     let total = *ends.last().unwrap_or(&0);
     if states.is_empty() || k == 0 {
@@ -132,7 +132,7 @@ pub fn check_states(case: &ShearCase, states: &[u64], k: u64) -> Result<()> {
         ));
     }
     for w in states.windows(2) {
-        if w[1] <= w[0] + k {
+        if w[1] <= w[0].saturating_add(k) {
             return Err(Error::invalid(
                 "--at",
                 format!("{} then {}", w[0], w[1]),
@@ -144,8 +144,9 @@ pub fn check_states(case: &ShearCase, states: &[u64], k: u64) -> Result<()> {
         let crosses = ends
             .iter()
             .chain(std::iter::once(&0))
-            .any(|&e| s <= e && e < s + k + 1);
-        if s == 0 || s + k > total || crosses {
+            .any(|&e| s <= e && e <= s.saturating_add(k));
+        // saturating: a start near u64::MAX must be refused here, not wrap past the check
+        if s == 0 || s.saturating_add(k) > total || crosses {
             return Err(Error::invalid(
                 "--at",
                 s,
