@@ -313,6 +313,35 @@ fn perturbed_reference_is_a_disagreement_with_exit_1() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("DISAGREE"));
 }
 
+/// A NaN or an infinity in a stored reference (stored so: consistent provenance) is a
+/// disagreement, as a NaN in live output is; it used to hang in the error plot's axis code.
+#[test]
+fn non_finite_reference_values_disagree_and_never_hang() {
+    for bad in ["NaN", "inf", "-inf"] {
+        let dir = tempfile::tempdir().unwrap();
+        let refdir = dir.path().join("ref");
+        edited_reference(
+            &refdir,
+            |lines| {
+                let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
+                cells[2] = bad.to_string();
+                lines[20] = cells.join(",");
+            },
+            true,
+        );
+        let (tx, rx) = std::sync::mpsc::channel();
+        let out = dir.path().join("out");
+        let r = refdir.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(verify_against(&r, &out));
+        });
+        let o = rx
+            .recv_timeout(std::time::Duration::from_secs(120))
+            .unwrap_or_else(|_| panic!("{bad} in the reference: no answer within 120 s"));
+        assert_eq!(o.status.code(), Some(1), "{bad}: {}", stderr(&o));
+    }
+}
+
 #[test]
 fn changed_reference_fails_its_checksum_with_exit_2() {
     let dir = tempfile::tempdir().unwrap();
@@ -436,7 +465,7 @@ fn unknown_case_and_model_list_the_valid_ones() {
 #[test]
 fn bad_case_files_name_the_field_and_range() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &str, &str); 9] = [
+    let cases: [(&str, &str, &str); 11] = [
         // finite values whose derived deck numbers were not (the period of the spin, the
         // power-of-two box)
         (
@@ -467,6 +496,17 @@ fn bad_case_files_name_the_field_and_range() {
             "position = [0.0, 0.0, 1.599e-3]",
             "position = [0.0, 0.0, 0.9e-3]",
             "initial overlap",
+        ),
+        // a vector longer than three was cut to its first three (issue #36)
+        (
+            "position = [0.0, 0.0, 1.599e-3]",
+            "position = [0.0, 0.0, 1.599e-3, 5.0, 6.0]",
+            "three numbers",
+        ),
+        (
+            "position = [0.0, 0.0, 0.0]",
+            "position = [0.0, 0.0]",
+            "three numbers",
         ),
     ];
     for (from, to, expect) in cases {

@@ -259,9 +259,15 @@ pub enum Motion {
     /// Not integrated: position, velocity and angular velocity stay as given.
     Fixed,
     /// Spins about its own centre at `omega` [rad/s] (LIGGGHTS `fix move rotate`).
-    Rotate { omega: [f64; 3] },
+    Rotate {
+        #[serde(deserialize_with = "exactly3")]
+        omega: [f64; 3],
+    },
     /// Moves at constant `velocity` [m/s] (LIGGGHTS `fix move linear`).
-    Linear { velocity: [f64; 3] },
+    Linear {
+        #[serde(deserialize_with = "exactly3")]
+        velocity: [f64; 3],
+    },
 }
 
 /// One sphere of a contact case.
@@ -271,15 +277,25 @@ pub struct ParticleSpec {
     /// Radius [m].
     pub radius: f64,
     /// Initial position [m].
+    #[serde(deserialize_with = "exactly3")]
     pub position: [f64; 3],
     /// Initial velocity [m/s].
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exactly3")]
     pub velocity: [f64; 3],
     /// Initial angular velocity [rad/s].
-    #[serde(default)]
+    #[serde(default, deserialize_with = "exactly3")]
     pub omega: [f64; 3],
     #[serde(default = "default_motion")]
     pub motion: Motion,
+}
+
+/// A vector of exactly three numbers: serde's fixed-size array reads the first three of a
+/// longer list and drops the rest silently (`position = [0, 0, 1.6e-3, 5, "junk"]` was read as
+/// its first three), so the list is read whole and its length checked.
+fn exactly3<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[f64; 3], D::Error> {
+    let v = Vec::<f64>::deserialize(d)?;
+    <[f64; 3]>::try_from(v.as_slice())
+        .map_err(|_| serde::de::Error::invalid_length(v.len(), &"three numbers [x, y, z]"))
 }
 
 fn default_motion() -> Motion {
