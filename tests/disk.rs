@@ -178,53 +178,57 @@ fn processes_under(dir: &Path) -> Vec<String> {
 }
 
 #[test]
-fn sigterm_ends_liggghts_with_verify_and_a_rerun_resumes() {
+fn sigterm_and_sigint_end_liggghts_with_verify_and_a_rerun_resumes() {
     let _ = common::liggghts();
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("lt");
-    let args = [
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--liggghts-only",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    let mut child = std::process::Command::new(common::verify_bin())
-        .args(args)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let t0 = Instant::now();
-    while processes_under(&out).is_empty() {
-        assert!(t0.elapsed().as_secs() < 60, "LIGGGHTS did not start");
-        std::thread::sleep(Duration::from_millis(20));
+    // SIGTERM as SLURM and systemd send it; SIGINT sent to verify alone (a terminal's Ctrl-C
+    // reaches the whole process group, LIGGGHTS included, and proves nothing)
+    for (name, signal) in [("SIGTERM", libc::SIGTERM), ("SIGINT", libc::SIGINT)] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("lt");
+        let args = [
+            "shear",
+            "--preset",
+            "ci",
+            "--seeds",
+            "1",
+            "--liggghts-only",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        let mut child = std::process::Command::new(common::verify_bin())
+            .args(args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let t0 = Instant::now();
+        while processes_under(&out).is_empty() {
+            assert!(t0.elapsed().as_secs() < 60, "LIGGGHTS did not start");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        // SAFETY: a signal to the child this test spawned and still owns
+        unsafe {
+            libc::kill(child.id() as i32, signal);
+        }
+        child.wait().unwrap();
+        let t1 = Instant::now();
+        while !processes_under(&out).is_empty() {
+            assert!(
+                t1.elapsed().as_secs() < 10,
+                "still running after {name}: {:?}",
+                processes_under(&out)
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let o = verify(&args);
+        assert_eq!(o.status.code(), Some(0), "{name}: {}", text(&o));
+        assert!(out.join("seed1/liggghts.csv").is_file());
+        let temps: Vec<_> = walk(&out)
+            .into_iter()
+            .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with(".tmp"))
+            .collect();
+        assert!(temps.is_empty(), "{name}: {temps:?}");
     }
-    // SIGTERM, as SLURM and systemd send it
-    unsafe {
-        libc::kill(child.id() as i32, libc::SIGTERM);
-    }
-    child.wait().unwrap();
-    let t1 = Instant::now();
-    while !processes_under(&out).is_empty() {
-        assert!(
-            t1.elapsed().as_secs() < 10,
-            "still running after SIGTERM: {:?}",
-            processes_under(&out)
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let o = verify(&args);
-    assert_eq!(o.status.code(), Some(0), "{}", text(&o));
-    assert!(out.join("seed1/liggghts.csv").is_file());
-    let temps: Vec<_> = walk(&out)
-        .into_iter()
-        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with(".tmp"))
-        .collect();
-    assert!(temps.is_empty(), "{temps:?}");
 }
 
 fn walk(dir: &Path) -> Vec<std::path::PathBuf> {
