@@ -271,6 +271,13 @@ fn edited_reference(refdir: &Path, edit: impl Fn(&mut Vec<String>), reseal: bool
     std::fs::write(dst.join("provenance.json"), prov.to_string()).unwrap();
 }
 
+/// Replaces the normal force (third column) of the stored reference's row 20 by `f` of it.
+fn edit_normal_force(lines: &mut [String], f: impl Fn(&str) -> String) {
+    let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
+    cells[2] = f(&cells[2]);
+    lines[20] = cells.join(",");
+}
+
 fn verify_against(refdir: &Path, out: &Path) -> Output {
     verify(&[
         "contact",
@@ -296,10 +303,9 @@ fn perturbed_reference_is_a_disagreement_with_exit_1() {
         &refdir,
         |lines| {
             // Scale the normal force of one row by (1 + 1e-6).
-            let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
-            let v: f64 = cells[2].parse().unwrap();
-            cells[2] = format!("{:e}", v * (1.0 + 1e-6));
-            lines[20] = cells.join(",");
+            edit_normal_force(lines, |v| {
+                format!("{:e}", v.parse::<f64>().unwrap() * (1.0 + 1e-6))
+            })
         },
         true,
     );
@@ -322,11 +328,7 @@ fn non_finite_reference_values_disagree_and_never_hang() {
         let refdir = dir.path().join("ref");
         edited_reference(
             &refdir,
-            |lines| {
-                let mut cells: Vec<String> = lines[20].split(',').map(String::from).collect();
-                cells[2] = bad.to_string();
-                lines[20] = cells.join(",");
-            },
+            |lines| edit_normal_force(lines, |_| bad.to_string()),
             true,
         );
         let (tx, rx) = std::sync::mpsc::channel();
