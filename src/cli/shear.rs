@@ -162,6 +162,7 @@ impl ShearArgs {
             threads: self.threads,
             out: out_or_default(self.out.as_deref(), prefix),
             quiet: false,
+            progress_label: None,
             strict_stability: self.strict_stability,
             mu_margin: self.mu_margin,
             stress_rtol: self.stress_rtol,

@@ -47,6 +47,19 @@ impl Progress {
         }
     }
 
+    /// Lines only (one per 10 %, never a bar), for runs that go beside others (a sweep's).
+    pub fn lines(label: &str, total: u64, dt: f64) -> Self {
+        Progress {
+            label: label.to_string(),
+            total,
+            dt,
+            bar: None,
+            last_decile: AtomicU64::new(0),
+            start: Instant::now(),
+            base: AtomicU64::new(0),
+        }
+    }
+
     /// A progress that reports nothing (tests, library use).
     pub fn hidden() -> Self {
         Progress {

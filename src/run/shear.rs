@@ -34,6 +34,10 @@ pub struct ShearRequest {
     pub out: PathBuf,
     /// No progress display or per-seed lines (callers with a display of their own).
     pub quiet: bool,
+    /// With `quiet`: still print a progress line (steps, simulated time, ETA) per 10 % of
+    /// each run, labelled with this (a sweep's run id: its runs last hours).
+    #[serde(default)]
+    pub progress_label: Option<String>,
     /// Refuse to run when the explicit rolling dashpot is expected to be unstable.
     pub strict_stability: bool,
     /// Largest accepted |mu_LIGGGHTS - mu_native| of the steady means (CIs must overlap too).
@@ -55,6 +59,7 @@ impl ShearRequest {
             threads: None,
             out,
             quiet: false,
+            progress_label: None,
             strict_stability: false,
             mu_margin: MU_MARGIN,
             stress_rtol: STRESS_RTOL,
@@ -613,10 +618,17 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                     Some(sc.spawn(move || Ok(c)))
                 }
                 (Some(l), _) => {
-                    let p = if quiet {
-                        Progress::hidden()
-                    } else {
-                        Progress::new(&multi, &format!("LIGGGHTS s{}", case.seed), total, case.dt)
+                    let p = match (quiet, &a.progress_label) {
+                        (false, _) => Progress::new(
+                            &multi,
+                            &format!("LIGGGHTS s{}", case.seed),
+                            total,
+                            case.dt,
+                        ),
+                        (true, Some(l)) => {
+                            Progress::lines(&format!("{l} LIGGGHTS"), total, case.dt)
+                        }
+                        (true, None) => Progress::hidden(),
                     };
                     let (packing, dir) = (&packing, &dir);
                     Some(sc.spawn(move || run_liggghts(case, packing, l, dir, &p, a.checkpoint)))
@@ -630,10 +642,17 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                         Ok(c)
                     }
                     None => {
-                        let p = if quiet {
-                            Progress::hidden()
-                        } else {
-                            Progress::new(&multi, &format!("native s{}", case.seed), total, case.dt)
+                        let p = match (quiet, &a.progress_label) {
+                            (false, _) => Progress::new(
+                                &multi,
+                                &format!("native s{}", case.seed),
+                                total,
+                                case.dt,
+                            ),
+                            (true, Some(l)) => {
+                                Progress::lines(&format!("{l} native"), total, case.dt)
+                            }
+                            (true, None) => Progress::hidden(),
                         };
                         pool.install(|| run_native(case, &packing, &dir, &p, a.checkpoint))
                     }

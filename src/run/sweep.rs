@@ -204,6 +204,8 @@ pub fn shear_request(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) 
     let mut q = ShearRequest::new(case, 1, base.engine, dir.to_path_buf());
     q.threads = Some(threads);
     q.quiet = true;
+    // a run of the paper's protocol lasts hours: a line per 10 % with its ETA
+    q.progress_label = Some(r.id.clone());
     q
 }
 
