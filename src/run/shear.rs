@@ -611,6 +611,12 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
         write_packing(&packing, &dir.join("initial_packing.csv"))?;
         let multi = MultiProgress::new();
         let total = case.total_steps();
+        // a bar (or decile lines off a terminal); quiet: lines under the caller's label, or none
+        let progress = |code: &str| match (quiet, &a.progress_label) {
+            (false, _) => Progress::new(&multi, &format!("{code} s{}", case.seed), total, case.dt),
+            (true, Some(l)) => Progress::lines(&format!("{l} {code}"), total, case.dt),
+            (true, None) => Progress::hidden(),
+        };
         let (lr, nr) = std::thread::scope(|sc| {
             let lh = match (&lig, cached(&dir, "liggghts", case)) {
                 (_, Some(c)) if run_lig => {
@@ -618,18 +624,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                     Some(sc.spawn(move || Ok(c)))
                 }
                 (Some(l), _) => {
-                    let p = match (quiet, &a.progress_label) {
-                        (false, _) => Progress::new(
-                            &multi,
-                            &format!("LIGGGHTS s{}", case.seed),
-                            total,
-                            case.dt,
-                        ),
-                        (true, Some(l)) => {
-                            Progress::lines(&format!("{l} LIGGGHTS"), total, case.dt)
-                        }
-                        (true, None) => Progress::hidden(),
-                    };
+                    let p = progress("LIGGGHTS");
                     let (packing, dir) = (&packing, &dir);
                     Some(sc.spawn(move || run_liggghts(case, packing, l, dir, &p, a.checkpoint)))
                 }
@@ -642,18 +637,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
                         Ok(c)
                     }
                     None => {
-                        let p = match (quiet, &a.progress_label) {
-                            (false, _) => Progress::new(
-                                &multi,
-                                &format!("native s{}", case.seed),
-                                total,
-                                case.dt,
-                            ),
-                            (true, Some(l)) => {
-                                Progress::lines(&format!("{l} native"), total, case.dt)
-                            }
-                            (true, None) => Progress::hidden(),
-                        };
+                        let p = progress("native");
                         pool.install(|| run_native(case, &packing, &dir, &p, a.checkpoint))
                     }
                 })
