@@ -469,3 +469,64 @@ fn a_replay_start_beyond_the_run_is_refused_by_its_range() {
         assert!(!out.join("liggghts").exists(), "LIGGGHTS ran: {t}");
     }
 }
+
+/// A run whose memory estimate exceeds what the process may use (here `ulimit -v`, as a SLURM
+/// job's limit) is refused before it allocates, the estimate and the bound in the message;
+/// the same run without the limit is not refused for memory.
+#[test]
+fn a_run_larger_than_the_memory_it_may_use_is_refused_with_its_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o = out.to_str().unwrap();
+    let bin = common::verify_bin();
+    let study = dir.path().join("s.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "version = 1\ncommand = \"shear\"\n[options]\npreset = \"ci\"\n\
+             native_only = true\nparticles = 2000000\nout = \"{o}\"\n"
+        ),
+    )
+    .unwrap();
+    for args in [
+        format!("bench --particles 2000000 --steps 1 --out {o}"),
+        format!("shear --preset ci --native-only --particles 2000000 --seeds 1 --out {o}"),
+        // the study's plan checks as the run does
+        format!("run {} --dry-run", study.display()),
+    ] {
+        // 1.5 GB of address space: the binary starts (about 0.1 GB), 2e6 particles would not fit
+        let r = std::process::Command::new("bash")
+            .arg("-c")
+            .arg(format!("ulimit -v 1500000 && exec {bin} {args}"))
+            .output()
+            .unwrap();
+        let t = text(&r);
+        assert_eq!(r.status.code(), Some(2), "{args}: {t}");
+        assert!(
+            t.contains("particles")
+                && t.contains("needs about 3.27 GB")
+                && t.contains("ulimit -v"),
+            "{args}: {t}"
+        );
+        assert!(!out.join("seed1").exists(), "{args} started a run");
+    }
+    // without the limit the small ci box is not refused: it runs (its verdict at 1 % strain,
+    // before the servo settles, is not the point here)
+    let r = verify(&[
+        "shear",
+        "--preset",
+        "ci",
+        "--native-only",
+        "--seeds",
+        "1",
+        "--strain",
+        "0.01",
+        "--out",
+        o,
+    ]);
+    assert!(
+        r.status.code() != Some(2) && out.join("seed1/native.csv").is_file(),
+        "{}",
+        text(&r)
+    );
+}

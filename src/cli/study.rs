@@ -260,7 +260,14 @@ struct Plan {
 }
 
 impl Plan {
-    fn of(runs: &[(Engine, ShearCase)]) -> Plan {
+    /// The plan of these runs, each native run checked against the machine's memory as the
+    /// run will check it.
+    fn of(runs: &[(Engine, ShearCase)]) -> Result<Plan> {
+        for (code, c) in runs {
+            if *code == Engine::Native {
+                crate::run::check_memory("particles", c.particles)?;
+            }
+        }
         let mut p = Plan {
             runs: runs.len(),
             steps: 0,
@@ -285,7 +292,7 @@ impl Plan {
                 + snaps * c.particles as f64 * per_particle
                 + 600.0 * c.particles as f64;
         }
-        p
+        Ok(p)
     }
 
     fn print(&self, what: &str, cores: usize) {
@@ -327,7 +334,7 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
                     runs.push((code, c.clone()));
                 }
             }
-            Some((Plan::of(&runs), "verify shear".into()))
+            Some((Plan::of(&runs)?, "verify shear".into()))
         }
         Command::Convergence(a) => {
             let req = a.case.request(a.engine.into(), "convergence");
@@ -351,7 +358,7 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
                     runs.push((Engine::Native, c.clone()));
                 }
             }
-            Some((Plan::of(&runs), "verify convergence".into()))
+            Some((Plan::of(&runs)?, "verify convergence".into()))
         }
         Command::Sweep(a) if a.action.is_none() => {
             let p = &a.plan;
@@ -381,7 +388,7 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
                     }
                 }
             }
-            Some((Plan::of(&runs), "verify sweep".into()))
+            Some((Plan::of(&runs)?, "verify sweep".into()))
         }
         Command::Nightly(a) => {
             // the shear points dominate (23 contact runs and the replay take minutes)
@@ -391,7 +398,7 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
                     runs.push((code, c.clone()));
                 }
             }
-            Some((Plan::of(&runs), "verify nightly, its shear points".into()))
+            Some((Plan::of(&runs)?, "verify nightly, its shear points".into()))
         }
         _ => None,
     })

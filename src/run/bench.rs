@@ -228,6 +228,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         super::check_threads("--procs", p)?;
     }
     crate::spec::shear::check_particles("--particles", a.particles)?;
+    super::check_memory("--particles", a.particles)?;
     if a.rounds == 0 || a.rounds > MAX_ROUNDS {
         return Err(Error::invalid(
             "--rounds",

@@ -8,6 +8,7 @@
 
 pub mod bench;
 pub mod contact;
+pub mod limits;
 pub mod convergence;
 pub mod convergence_outcome;
 pub mod nightly;
@@ -15,6 +16,8 @@ pub mod nightly_outcome;
 pub mod replay;
 pub mod shear;
 pub mod sweep;
+
+pub use limits::{check_memory, check_threads, max_threads};
 
 use crate::error::{Error, Result};
 use crate::liggghts::Liggghts;
@@ -25,26 +28,6 @@ use std::time::Duration;
 /// Version of the outcome and summary files (`summary.json`, `outcome.json`) written by the run
 /// layer; readers refuse other versions.
 pub const SCHEMA: u32 = 2;
-
-/// Most native threads per run: 4 per core of this machine (at least 8). More threads than
-/// cores only share them; thousands exhaust the process's threads (a panic) or stall.
-pub fn max_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get()) * 4
-}
-
-/// The one rule for a thread count (`--threads` of every command).
-pub fn check_threads(field: &str, n: usize) -> crate::error::Result<usize> {
-    let max = max_threads().max(8);
-    if (1..=max).contains(&n) {
-        Ok(n)
-    } else {
-        Err(crate::error::Error::invalid(
-            field,
-            n,
-            format!("1 ..= {max} (4 x this machine's cores, at least 8)"),
-        ))
-    }
-}
 
 /// The summary file the running command wrote last (what `--json` prints).
 static SUMMARY: std::sync::Mutex<Option<PathBuf>> = std::sync::Mutex::new(None);

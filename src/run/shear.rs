@@ -514,6 +514,9 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
     let case0 = &cases[0].0;
     let run_lig = a.engine.runs_liggghts();
     let run_nat = a.engine.runs_native();
+    if run_nat {
+        super::check_memory("particles", case0.particles)?;
+    }
     let lig = if run_lig {
         Some(a.liggghts.locate()?)
     } else {

@@ -164,6 +164,7 @@ pub fn check_states(case: &ShearCase, states: &[u64], k: u64) -> Result<()> {
 pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Result<ReplayOutcome> {
     let case = replay_case(&req.case)?;
     check_states(&case, &req.states, req.steps)?;
+    crate::run::check_memory("particles", case.particles)?;
     let k = req.steps;
     let n_hist = history_len(case.models.rolling);
     let packing = loose_packing(&case);
