@@ -37,6 +37,54 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// The record of a derived file a resume reuses (a sweep run's `result.json`, a convergence
+/// run's series): `<file>.sha256` beside it, holding the input hash the file was made from and
+/// the SHA-256 of its bytes.
+fn record_path(path: &Path) -> std::path::PathBuf {
+    let mut name = path.file_name().unwrap_or_default().to_os_string();
+    name.push(".sha256");
+    path.with_file_name(name)
+}
+
+/// Writes the record of `path` (already written, atomically) for `input`: written after the
+/// file, so that a crash between the two leaves a record that does not match and the file is
+/// made again.
+pub fn write_record(path: &Path, input: &str) -> Result<()> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    write_atomic(
+        &record_path(path),
+        format!("{input} {}\n", sha256_hex(&bytes)).as_bytes(),
+    )
+}
+
+/// The bytes of `path` when its record names `input` and the bytes' SHA-256; otherwise why it
+/// is not reused (a sentence for the user; a missing file is `Ok(None)`).
+pub fn read_recorded(path: &Path, input: &str) -> std::result::Result<Option<Vec<u8>>, String> {
+    let Ok(bytes) = std::fs::read(path) else {
+        return Ok(None);
+    };
+    let rec = std::fs::read_to_string(record_path(path)).map_err(|e| {
+        format!(
+            "its record {} cannot be read ({e})",
+            record_path(path).display()
+        )
+    })?;
+    let mut f = rec.split_whitespace();
+    match (f.next(), f.next(), f.next()) {
+        (Some(i), Some(_), None) if i != input => {
+            Err("it was made from other inputs (its input hash differs)".into())
+        }
+        (Some(_), Some(h), None) if h != sha256_hex(&bytes) => {
+            Err("its bytes differ from those written (SHA-256 mismatch)".into())
+        }
+        (Some(_), Some(_), None) => Ok(Some(bytes)),
+        _ => Err(format!(
+            "its record {} is malformed",
+            record_path(path).display()
+        )),
+    }
+}
+
 /// Reads a file to a string with the path in the error.
 pub fn read_to_string(path: &Path) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| Error::io(path, e))

@@ -503,9 +503,7 @@ fn a_run_larger_than_the_memory_it_may_use_is_refused_with_its_estimate() {
         let t = text(&r);
         assert_eq!(r.status.code(), Some(2), "{args}: {t}");
         assert!(
-            t.contains("particles")
-                && t.contains("needs about 3.27 GB")
-                && t.contains("ulimit -v"),
+            t.contains("particles") && t.contains("needs about 3.27 GB") && t.contains("ulimit -v"),
             "{args}: {t}"
         );
         assert!(!out.join("seed1").exists(), "{args} started a run");

@@ -123,14 +123,25 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
         "{}",
         text(&o)
     );
+    // ... and a result edited on disk (its first friction figure) is made again from its
+    // stored seeds, never read as it stands
     std::fs::remove_file(out.join("runs/mur1_etar0_s2/result.json")).unwrap();
+    let edited = out.join("runs/mur0_etar0_s1/result.json");
+    let t = std::fs::read_to_string(&edited).unwrap();
+    let at = t.find("\"mu\": ").expect("a friction figure") + 6;
+    std::fs::write(&edited, format!("{}0.999{}", &t[..at], &t[at + 5..])).unwrap();
     let o = sweep(&["--engine", "both", "--out", out.to_str().unwrap()]);
     assert!(
-        text(&o).contains("7 runs already have a current result"),
+        text(&o).contains("6 runs already have a current result"),
         "{}",
         text(&o)
     );
-    assert!(text(&o).contains("ran 1 runs"), "{}", text(&o));
+    assert!(text(&o).contains("ran 2 runs"), "{}", text(&o));
+    assert!(
+        text(&o).contains("result.json is not reused: its bytes differ"),
+        "{}",
+        text(&o)
+    );
     assert_eq!(
         results(&out),
         res,

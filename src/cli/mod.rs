@@ -165,7 +165,8 @@ pub enum Command {
     /// history.
     #[command(after_help = "Examples:\n  \
         verify nightly --quick --out runs/nightly/quick   # minutes: ci preset, one seed\n  \
-        tools/nightly.sh                                  # the full night into runs/nightly/<date>\n\n\
+        tools/nightly.sh                                  # the full night into runs/nightly/<date>\n  \
+        verify nightly --rerender --out reference/nightly/20261202-e1  # a stored night judged and drawn again\n\n\
         Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive.")]
     Nightly(nightly::NightlyArgs),
     /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,

@@ -3,7 +3,7 @@
 
 use crate::cli::LiggghtsArgs;
 use crate::error::Result;
-use crate::run::nightly::{run, NightlyRequest};
+use crate::run::nightly::{rerender, run, NightlyRequest};
 use crate::run::{Verdict, SHEAR_TIMEOUT_S};
 use clap::Args;
 use std::path::PathBuf;
@@ -19,6 +19,10 @@ pub struct NightlyArgs {
     /// History file (JSON lines, one per case per night; default: history.jsonl next to --out).
     #[arg(long)]
     pub history: Option<PathBuf>,
+    /// No runs: judge the stored night in --out again by this version's rules from its
+    /// summary.json's per-seed figures and make its report.html again (summary.json is kept).
+    #[arg(long, conflicts_with = "quick")]
+    pub rerender: bool,
     #[command(flatten)]
     pub liggghts: LiggghtsArgs,
 }
@@ -30,5 +34,8 @@ pub fn nightly(a: NightlyArgs) -> Result<Verdict> {
         history: a.history,
         liggghts: a.liggghts.request(SHEAR_TIMEOUT_S),
     };
+    if a.rerender {
+        return Ok(rerender(&req)?.verdict());
+    }
     Ok(run(&req)?.verdict())
 }

@@ -52,6 +52,33 @@ fn sci(v: f64) -> String {
     }
 }
 
+/// The measured steady-mu figure of a shear row: the paired difference with the 90 % CI its
+/// verdict was judged on (and the seeds that would decide an inconclusive row); nights stored
+/// before the equivalence test show the difference of the means and whether the CIs overlap.
+fn mu_measured(r: &ShearRow) -> String {
+    match &r.mu_equivalence {
+        Some(eq) => format!(
+            "paired Δμ = {:+.4}, 90 % CI [{:+.4}, {:+.4}] over {} seed(s){}",
+            eq.mean,
+            eq.mean - eq.ci90,
+            eq.mean + eq.ci90,
+            eq.n,
+            eq.seeds_needed
+                .map(|k| format!(", about {k} seeds would decide"))
+                .unwrap_or_default()
+        ),
+        None => format!(
+            "|Δμ| = {}{}",
+            num(r.dmu, 4),
+            match r.ci_overlap {
+                Some(true) => ", CIs overlap",
+                Some(false) => ", CIs do NOT overlap",
+                None => "",
+            }
+        ),
+    }
+}
+
 /// The report page.
 pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<String> {
     let plots = out.join("plots");
@@ -83,11 +110,11 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         ),
         None => String::new(),
     };
-    let (kind, what) = if s.quick {
-        ("quick", "ci shear preset, 1 seed")
-    } else {
-        ("full", "fast shear preset, 3 seeds")
-    };
+    let kind = if s.quick { "quick" } else { "full" };
+    // the shear rows say what ran (a night's seeds have changed over time)
+    let what = s.shear.first().map_or("no shear cases".to_string(), |r| {
+        format!("{} shear preset, {} seed(s)", r.preset, r.seeds)
+    });
     p.push(html! {
         p.meta {
             "Night " (s.date_utc) " UTC, " (kind) " night (" (what) ") · project commit "
@@ -95,6 +122,15 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             " · wall time " b { (format!("{:.1} min", s.wall_time_s / 60.0)) } (budget)
         }
     });
+    if let Some(by) = &s.rejudged {
+        p.push(html! {
+            p.meta {
+                "The shear rows were judged again from the night's stored per-seed figures by "
+                b { (by) } " (`verify nightly --rerender`): the verdicts and figures below are \
+                 this version's reading of that evidence, not the night's own words."
+            }
+        });
+    }
     for e in &s.errors {
         p.push(html! { p.fail { (e) } });
     }
@@ -121,13 +157,8 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             (html! { a href={"#" (anchor(&r.dir))} { (r.name) } }, ""),
             (
                 text(format!(
-                    "|Δμ| = {}{}; normal stress off by {}",
-                    num(r.dmu, 4),
-                    match r.ci_overlap {
-                        Some(true) => ", CIs overlap",
-                        Some(false) => ", CIs do NOT overlap",
-                        None => "",
-                    },
+                    "{}; normal stress off by {}",
+                    mu_measured(r),
                     r.stress_rel_err
                         .map(|e| format!("{:.2} %", 100.0 * e))
                         .unwrap_or("–".into())

@@ -52,7 +52,10 @@ pub fn memory_available() -> Option<(u64, &'static str)> {
     let mut bounds: Vec<(u64, &'static str)> = Vec::new();
     if let Some(sys) = &sys {
         if sys.available_memory() > 0 {
-            bounds.push((sys.available_memory(), "the memory this machine has available"));
+            bounds.push((
+                sys.available_memory(),
+                "the memory this machine has available",
+            ));
         }
         if let Some(c) = sys.cgroup_limits() {
             bounds.push((c.free_memory, "the free memory of this process's cgroup"));
@@ -83,7 +86,7 @@ fn address_space_left() -> Option<u64> {
     // SAFETY: sysconf reads a constant of the system; no memory is touched.
     let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
     let used = pages.saturating_mul(u64::try_from(page).ok()?);
-    Some((lim.rlim_cur as u64).saturating_sub(used))
+    Some(lim.rlim_cur.saturating_sub(used))
 }
 
 /// The one memory rule of a native run: refused when its estimate ([`native_estimate`]) is more

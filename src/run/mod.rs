@@ -8,9 +8,9 @@
 
 pub mod bench;
 pub mod contact;
-pub mod limits;
 pub mod convergence;
 pub mod convergence_outcome;
+pub mod limits;
 pub mod nightly;
 pub mod nightly_outcome;
 pub mod replay;

@@ -70,6 +70,17 @@ impl NightlySummary {
     }
 }
 
+/// The history file of a night: `a.history`, or history.jsonl next to its folder.
+fn history_path(a: &NightlyRequest) -> PathBuf {
+    a.history.clone().unwrap_or_else(|| {
+        a.out
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."))
+            .join("history.jsonl")
+    })
+}
+
 /// Runs the night (resuming what DIR holds), writes `summary.json`, appends the history and
 /// writes `report.html`. A case that could not be run is kept in its row and makes the night an
 /// error after everything else has run and been reported.
@@ -80,13 +91,7 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
         .map(|d| d.as_secs())
         .unwrap_or(0);
     let date = utc_stamp();
-    let history_path = a.history.clone().unwrap_or_else(|| {
-        a.out
-            .parent()
-            .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."))
-            .join("history.jsonl")
-    });
+    let history_path = history_path(a);
     // fail early on an unreadable history, before hours of runs
     history::read(&history_path)?;
     let lig = a.liggghts.locate()?;
@@ -133,6 +138,7 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
         contact,
         shear,
         errors,
+        rejudged: None,
     };
     write_atomic(
         &a.out.join("summary.json"),
@@ -261,16 +267,7 @@ fn shear_night(
 ) -> ShearRow {
     let preset = if a.quick { Preset::Ci } else { Preset::Fast };
     let dir = shear_dir(mu_r, eta_r, rolling);
-    let case = CaseRequest {
-        preset,
-        rolling,
-        mu_r,
-        eta_r,
-        seed: 1,
-        protocol: Protocol::default(),
-        overrides: Overrides::default(),
-        allow_inertial: false,
-    };
+    let case = night_case(preset, rolling, mu_r, eta_r);
     let mut args = ShearRequest::new(
         case,
         if a.quick { 1 } else { FULL_SEEDS },
@@ -306,6 +303,7 @@ fn shear_night(
         dashpot_stable: None,
         worst_stability: None,
         paired_dmu: None,
+        mu_equivalence: None,
         replay: None,
         dir,
     };
@@ -332,6 +330,98 @@ fn shear_night(
         }
     }
     row
+}
+
+/// The case of a nightly shear point (its first seed).
+fn night_case(preset: Preset, rolling: RollingModel, mu_r: f64, eta_r: f64) -> CaseRequest {
+    CaseRequest {
+        preset,
+        rolling,
+        mu_r,
+        eta_r,
+        seed: 1,
+        protocol: Protocol::default(),
+        overrides: Overrides::default(),
+        allow_inertial: false,
+    }
+}
+
+/// A stored night's shear rows judged again by this version's rules from their stored
+/// per-seed figures, as a night run now would judge them: the steady-mu equivalence test
+/// ([`super::shear::mu_results`], margin [`MU_MARGIN`] or [`QUICK_MU_MARGIN`]) and each code's
+/// normal stress against the preset's target ([`super::shear::stress_result`]); a row's
+/// replay must still pass and its error stays an error. The slip channel is not stored in a
+/// nightly row and is not judged again. Rows without both codes' per-seed figures keep
+/// their stored verdict. The night's verdict follows its rows.
+pub fn rejudge(s: &mut NightlySummary) -> Result<()> {
+    let (margin, rtol) = if s.quick {
+        (QUICK_MU_MARGIN, QUICK_STRESS_RTOL)
+    } else {
+        (MU_MARGIN, STRESS_RTOL)
+    };
+    for row in &mut s.shear {
+        let (Some(l), Some(n)) = (&row.liggghts, &row.native) else {
+            continue;
+        };
+        let (l, n) = (&l.steady, &n.steady);
+        let req = ShearRequest::new(
+            night_case(row.preset, row.rolling, row.mu_r, row.eta_r),
+            row.seeds,
+            Engine::Both,
+            PathBuf::new(),
+        );
+        let (case, _) = req.seed_case(1)?;
+        let model = row.rolling.keyword();
+        let stress: Vec<_> = [("liggghts", l), ("native", n)]
+            .into_iter()
+            .map(|(code, st)| {
+                super::shear::stress_result(&row.name, model, code, st, case.normal_stress, 0, rtol)
+            })
+            .collect();
+        let (mu, paired, eq) = super::shear::mu_results(&row.name, model, l, n, 0, margin);
+        row.mu_equivalence = Some(eq);
+        let mu = &mu[0];
+        row.dmu = Some(mu.max_abs_err);
+        row.mu_atol = margin;
+        row.stress_rel_err = stress.iter().map(|r| r.max_rel_err).reduce(f64::max);
+        row.stress_rtol = rtol;
+        row.ci_overlap = Some(within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95));
+        row.paired_dmu = paired;
+        row.pass = row.error.is_none()
+            && mu.pass
+            && stress.iter().all(|r| r.pass)
+            && row.replay.as_ref().is_none_or(|r| r.pass);
+        row.inconclusive = row.pass && mu.inconclusive;
+    }
+    s.pass =
+        s.errors.is_empty() && s.contact.iter().all(|c| c.pass) && s.shear.iter().all(|r| r.pass);
+    s.rejudged = Some(format!(
+        "verify {} (commit {}), {}",
+        env!("CARGO_PKG_VERSION"),
+        git_commit(),
+        utc_stamp()
+    ));
+    Ok(())
+}
+
+/// `verify nightly --rerender`: the stored `summary.json` of `a.out` judged again
+/// ([`rejudge`]) and its `report.html` made again by this version, with the history read (not
+/// appended). No case runs; `summary.json` is kept as the night wrote it.
+pub fn rerender(a: &NightlyRequest) -> Result<NightlySummary> {
+    let mut summary: NightlySummary = super::load(&a.out.join("summary.json"))?;
+    rejudge(&mut summary)?;
+    let all = history::read(&history_path(a))?;
+    let html = crate::report::nightly::report(&summary, &all, &a.out)?;
+    let page = a.out.join("report.html");
+    write_atomic(&page, html.as_bytes())?;
+    println!(
+        "nightly of {} judged again by {}: {}; report {}",
+        summary.date_utc,
+        summary.rejudged.as_deref().unwrap_or_default(),
+        format!("{:?}", summary.verdict()).to_lowercase(),
+        page.display()
+    );
+    Ok(summary)
 }
 
 /// `verify replay` of a nightly point: seed 1, windows in compaction and early shear (a stored
@@ -404,6 +494,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary) -> Result<()> {
         row.ci_overlap = Some(within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95));
     }
     row.paired_dmu = s.paired_dmu.clone();
+    row.mu_equivalence = s.mu_equivalence.clone();
     let lock = |f: &dyn Fn(&SeedResult) -> Option<u64>| {
         s.seeds.iter().map(f).collect::<Option<Vec<u64>>>()
     };

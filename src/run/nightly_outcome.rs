@@ -146,6 +146,10 @@ pub struct ShearRow {
     pub worst_stability: Option<String>,
     /// Per-seed steady mu, native - LIGGGHTS over the same seeds.
     pub paired_dmu: Option<Paired>,
+    /// The equivalence test of that difference behind the row's steady-mu verdict (absent in
+    /// nights before 2026-12-05 that were not judged again).
+    #[serde(default)]
+    pub mu_equivalence: Option<crate::compare::Equivalence>,
     /// `verify replay` of the same point (seed 1): the codes contact by contact.
     pub replay: Option<ReplayRow>,
     pub dir: String,
@@ -182,6 +186,10 @@ pub struct NightlySummary {
     pub contact: Vec<ContactRow>,
     pub shear: Vec<ShearRow>,
     pub errors: Vec<String>,
+    /// Set when the shear rows were judged again by a later version from their stored per-seed
+    /// figures (`verify nightly --rerender`): which version, and when.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rejudged: Option<String>,
 }
 
 impl crate::run::Versioned for NightlySummary {

@@ -442,6 +442,34 @@ impl super::Versioned for ShearSummary {
     }
 }
 
+/// The channel `normal_stress_<code>`: the code's mean normal stress on the top plate against
+/// the servo's `target`, within `rtol` relative. The mean is over seeds and the whole steady
+/// window: per-seed means of a few hundred particles fluctuate by several per cent.
+pub fn stress_result(
+    label: &str,
+    model: &str,
+    code: &str,
+    st: &Steady,
+    target: f64,
+    window_end: u64,
+    rtol: f64,
+) -> crate::compare::ChannelResult {
+    let worst = (st.normal_stress / target - 1.0).abs();
+    crate::compare::ChannelResult {
+        case: label.into(),
+        model: model.into(),
+        channel: format!("normal_stress_{code}"),
+        unit: "Pa".into(),
+        max_abs_err: worst * target,
+        max_rel_err: worst,
+        peak: target,
+        worst_step: window_end,
+        rtol,
+        pass: worst <= rtol,
+        inconclusive: false,
+    }
+}
+
 /// The steady-friction channel `mu_steady` of two codes' steady means over the same seeds: an
 /// equivalence test of the seed-paired difference native - LIGGGHTS against `mu_margin`
 /// ([`crate::compare::equivalence`]: agree when its 90 % CI lies inside the margin, DISAGREE
@@ -713,22 +741,15 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
     let target = case0.normal_stress;
     for (code, st) in [("liggghts", &ls), ("native", &ns)] {
         if let Some(st) = st {
-            // mean over seeds and the whole steady window: per-seed means of a few hundred
-            // particles fluctuate by several per cent
-            let worst = (st.normal_stress / target - 1.0).abs();
-            results.push(crate::compare::ChannelResult {
-                case: label.clone(),
-                model: model.clone(),
-                channel: format!("normal_stress_{code}"),
-                unit: "Pa".into(),
-                max_abs_err: worst * target,
-                max_rel_err: worst,
-                peak: target,
-                worst_step: window.1,
-                rtol: a.stress_rtol,
-                pass: worst <= a.stress_rtol,
-                inconclusive: false,
-            });
+            results.push(stress_result(
+                &label,
+                &model,
+                code,
+                st,
+                target,
+                window.1,
+                a.stress_rtol,
+            ));
         }
     }
     let (paired_dmu, mu_equivalence) = match (&ls, &ns) {

@@ -1,9 +1,10 @@
 //! The parametric study: a manifest of runs (one per (mu_r, eta_r, seed)), each run's result
 //! written atomically next to the hash of its inputs, and the collection of results.
 //!
-//! Resumption rule: a run is done when `runs/<id>/result.json` exists and carries the same input
-//! hash as the manifest entry; anything else (missing, older inputs, another code version) is
-//! run again. The hash covers the full shear case of the seed (materials, box, protocol, dt,
+//! Resumption rule: a run is done when `runs/<id>/result.json` exists, its record
+//! `result.json.sha256` names the manifest entry's input hash and the file's SHA-256, and the
+//! result is that entry's; anything else (missing, edited, older inputs, another code version)
+//! is made again (from the run's stored seed when that still verifies). The hash covers the full shear case of the seed (materials, box, protocol, dt,
 //! rolling model and coefficients), the engine and the crate version, as FNV-1a 64 of its JSON.
 
 use super::shear::{ShearRequest, ShearSummary};
@@ -264,11 +265,26 @@ pub fn run_dir(sweep: &Path, r: &RunSpec) -> PathBuf {
     sweep.join("runs").join(&r.id)
 }
 
-/// The stored result of a run if it is current (same input hash), else None.
+/// The stored result of a run if it is current, else None: its record
+/// ([`crate::fsutil::read_recorded`]) names the run's input hash and the file's SHA-256, and
+/// the result is the manifest entry's.
 pub fn current_result(sweep: &Path, r: &RunSpec) -> Option<RunResult> {
-    let text = std::fs::read_to_string(run_dir(sweep, r).join("result.json")).ok()?;
-    let res: RunResult = serde_json::from_str(&text).ok()?;
-    (res.run.input_hash == r.input_hash).then_some(res)
+    stored_result(sweep, r).ok().flatten()
+}
+
+/// [`current_result`] with the reason a stored result is not reused (`Ok(None)`: none stored).
+fn stored_result(sweep: &Path, r: &RunSpec) -> std::result::Result<Option<RunResult>, String> {
+    let Some(bytes) =
+        crate::fsutil::read_recorded(&run_dir(sweep, r).join("result.json"), &r.input_hash)?
+    else {
+        return Ok(None);
+    };
+    let res: RunResult =
+        serde_json::from_slice(&bytes).map_err(|e| format!("it is not a run result ({e})"))?;
+    if res.run != *r {
+        return Err("it is the result of another manifest entry".into());
+    }
+    Ok(Some(res))
 }
 
 /// Runs one entry of the manifest (unless its current result exists) and writes its result
@@ -280,8 +296,13 @@ pub fn run_one(
     threads: usize,
 ) -> Result<(RunResult, bool)> {
     let r = m.run(index)?;
-    if let Some(res) = current_result(sweep, r) {
-        return Ok((res, false));
+    match stored_result(sweep, r) {
+        Ok(Some(res)) => return Ok((res, false)),
+        Ok(None) => {}
+        Err(why) => eprintln!(
+            "warning: run {} ({}): the stored result.json is not reused: {why}; made again",
+            r.index, r.id
+        ),
     }
     let dir = run_dir(sweep, r);
     let req = shear_request(&m.base, r, &dir, threads);
@@ -331,10 +352,9 @@ pub fn run_one(
         native_wall_s: seed.and_then(|s| s.native_wall_s),
         date_utc: super::utc_stamp(),
     };
-    write_atomic(
-        &dir.join("result.json"),
-        serde_json::to_string_pretty(&res)?.as_bytes(),
-    )?;
+    let path = dir.join("result.json");
+    write_atomic(&path, serde_json::to_string_pretty(&res)?.as_bytes())?;
+    crate::fsutil::write_record(&path, &r.input_hash)?;
     Ok((res, true))
 }
 
@@ -705,13 +725,20 @@ mod tests {
             date_utc: "now".into(),
         };
         let dir = tempfile::tempdir().unwrap();
-        write_atomic(
-            &run_dir(dir.path(), &m.runs[0]).join("result.json"),
-            serde_json::to_string(&res).unwrap().as_bytes(),
-        )
-        .unwrap();
+        let path = run_dir(dir.path(), &m.runs[0]).join("result.json");
+        write_atomic(&path, serde_json::to_string(&res).unwrap().as_bytes()).unwrap();
+        // without its record a result is not trusted
+        assert!(current_result(dir.path(), &m.runs[0]).is_none());
+        crate::fsutil::write_record(&path, &m.runs[0].input_hash).unwrap();
         let back = current_result(dir.path(), &m.runs[0]).expect("a stored result reads back");
         let n = back.stages[0].native.as_ref().unwrap();
         assert!(n.mu.is_nan() && n.per_seed_mu[0].is_nan() && back.stability_s.is_nan());
+        // one changed byte (a friction figure edited by hand) and it is made again
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::write(&path, text.replacen("0.01", "0.02", 1)).unwrap();
+        assert!(current_result(dir.path(), &m.runs[0]).is_none());
+        assert!(stored_result(dir.path(), &m.runs[0])
+            .unwrap_err()
+            .contains("SHA-256"));
     }
 }
