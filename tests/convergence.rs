@@ -3,6 +3,7 @@
 mod common;
 
 use common::verify;
+use dem_verify::compare::Outcome;
 use dem_verify::run::convergence::{ConvergenceSummary, DtPoint, StudyCode};
 
 #[test]
@@ -52,7 +53,7 @@ fn convergence_runs_and_reports_stability_per_dt() {
         assert!(runs.contains(&want), "{want:?} missing from {runs:?}");
     }
     assert_eq!(runs.len(), 4, "{runs:?}");
-    assert!(s.implicit_matches_finest.is_some(), "{s:?}");
+    assert!(!s.inconclusive, "a difference of 0.4 is decided: {s:?}");
     // LIGGGHTS stopped at factor 1: judged and reported, but the verdict is native's
     let verdict = |code| s.per_code.iter().find(|v| v.code == code).unwrap();
     assert_eq!(
@@ -63,11 +64,22 @@ fn convergence_runs_and_reports_stability_per_dt() {
         (0.5, 1.0)
     );
     assert!(!verdict(StudyCode::Native).converged);
-    // both codes show the same artefact at the paper's dt: they agree with each other there
-    // (measured 0.258 +- 0.027 native, 0.292 +- 0.030 LIGGGHTS), far below native at dt / 2
-    // (0.94 +- 0.02), and the stable dashpot at the paper's dt agrees with dt / 2
-    assert_eq!(s.codes_agree, vec![(1.0, true)], "{s:?}");
-    assert_eq!(s.implicit_matches_finest, Some(true), "{s:?}");
+    // both codes show the same artefact at the paper's dt: they do not differ there
+    // (measured 0.258 +- 0.027 native, 0.292 +- 0.030 LIGGGHTS: one seed's block CIs cannot
+    // show them within 0.03 either, so "inconclusive" is the honest word), both far below
+    // native at dt / 2 (0.94 +- 0.02); the stable dashpot at the paper's dt does not differ
+    // from dt / 2
+    assert_eq!(s.codes_agree.len(), 1, "{s:?}");
+    assert_eq!(s.codes_agree[0].0, 1.0);
+    assert_ne!(s.codes_agree[0].1.outcome, Outcome::Disagree, "{s:?}");
+    let im = s
+        .implicit_matches_finest
+        .as_ref()
+        .expect("with --with-implicit");
+    assert_ne!(im.outcome, Outcome::Disagree, "{s:?}");
+    let step = verdict(StudyCode::Native).finest_step.clone().unwrap();
+    assert_eq!(step.outcome, Outcome::Disagree, "{step:?}");
+    assert!(step.mean > 0.4, "dt / 2 minus dt: {step:?}");
     let point = |code, f: f64| {
         s.points
             .iter()
@@ -108,12 +120,25 @@ fn convergence_runs_and_reports_stability_per_dt() {
     // (as JSON: NaN fields compare equal there)
     let json = |p: &[DtPoint]| serde_json::to_string(p).unwrap();
     assert_eq!(json(&read().points), json(&s.points));
+    // a stored series edited on disk (one digit of its last row) is not reused: that run is
+    // made again, to the same bits
+    let csv = out.join("dt0.5/seed1/native.csv");
+    let mut bytes = std::fs::read(&csv).unwrap();
+    let k = bytes.len() - 3;
+    bytes[k] = if bytes[k] == b'1' { b'2' } else { b'1' };
+    std::fs::write(&csv, bytes).unwrap();
+    let o3 = verify(&args);
+    let text3 = common::text(&o3);
+    assert_eq!(o3.status.code(), o.status.code(), "{text3}");
+    assert_eq!(text3.matches("current result kept").count(), 3, "{text3}");
+    assert!(text3.contains("is not reused: its bytes differ"), "{text3}");
+    assert_eq!(json(&read().points), json(&s.points));
 }
 
 /// The positive side: where the explicit dashpot is stable, (mu_r, eta_r) = (0.5, 0), halving
-/// dt leaves the steady friction within its CI (3 seeds: measured 0.483 +- 0.055 and
-/// 0.490 +- 0.047), so the study must say "converged" (exit 0) with CIs narrow enough to
-/// have told the unstable case apart.
+/// dt leaves the steady friction where it was (3 seeds: measured 0.5636 +- 0.0598 and
+/// 0.5671 +- 0.0247), so the study must say "converged" (exit 0): the seed-paired difference
+/// is equivalent to 0 within the margin 0.03.
 #[test]
 fn a_stable_point_converges() {
     let dir = tempfile::tempdir().unwrap();
@@ -141,6 +166,10 @@ fn a_stable_point_converges() {
     assert_eq!(o.status.code(), Some(0), "{text}");
     let s: ConvergenceSummary = dem_verify::run::load(&out.join("summary.json")).unwrap();
     assert!(s.converged, "{s:?}");
+    // the equivalence test decided it: the paired difference of dt / 2 and dt over the 3 seeds
+    // (same compacted states) lies within 0.03 (measured +0.0035, 90 % CI [-0.0206, +0.0276])
+    let step = s.per_code[0].finest_step.clone().unwrap();
+    assert_eq!((step.n, step.outcome), (3, Outcome::Agree), "{step:?}");
     assert_eq!(s.points.len(), 2, "{s:?}");
     for p in &s.points {
         assert!(p.stability.stable, "{p:?}");

@@ -4,6 +4,7 @@
 
 mod common;
 
+use dem_verify::run::nightly_outcome::NightlySummary;
 use std::path::{Path, PathBuf};
 
 fn pages(dir: &Path) -> Vec<PathBuf> {
@@ -82,4 +83,88 @@ fn every_stored_page_is_made_again_by_this_version() {
         evidence,
         "summary.json kept"
     );
+    verdicts_are_as_written(&root);
+}
+
+/// The verdicts recomputed from the stored evidence are those written in
+/// reference/verdicts.toml (issue #35: a rule change that moves a stored verdict fails here
+/// until the file says so).
+fn verdicts_are_as_written(root: &Path) {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let written: toml::Table =
+        toml::from_str(&std::fs::read_to_string(here.join("reference/verdicts.toml")).unwrap())
+            .unwrap();
+    let nights = written["nightly"].as_table().unwrap();
+    assert!(!nights.is_empty());
+    for (night, rows) in nights {
+        let mut s: NightlySummary =
+            dem_verify::run::load(&root.join("nightly").join(night).join("summary.json")).unwrap();
+        dem_verify::run::nightly::rejudge(&mut s).unwrap();
+        let got: toml::Table = s
+            .shear
+            .iter()
+            .map(|r| {
+                let v = if r.error.is_some() {
+                    "error"
+                } else if !r.pass {
+                    "DISAGREE"
+                } else if r.inconclusive {
+                    "inconclusive"
+                } else {
+                    "agree"
+                };
+                (r.name.clone(), toml::Value::String(v.into()))
+            })
+            .collect();
+        assert_eq!(&got, rows.as_table().unwrap(), "night {night}");
+    }
+    let sweeps = written["sweep"].as_table().unwrap();
+    let stored: Vec<String> = std::fs::read_dir(root.join("sweep"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.join("runs").is_dir())
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        stored.len(),
+        sweeps.len(),
+        "every stored sweep is written down"
+    );
+    for (sweep, want) in sweeps {
+        let rep: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(root.join("sweep").join(sweep).join("report.json")).unwrap(),
+        )
+        .unwrap();
+        let want = want.as_table().unwrap();
+        assert!(want.contains_key("conclusions"), "sweep {sweep}");
+        for key in ["conclusions", "converged_conclusions"] {
+            let got: Vec<String> = rep[key]
+                .as_array()
+                .map(|sets| {
+                    sets.iter()
+                        .flat_map(|set| {
+                            let code = set[0].as_str().unwrap().to_string();
+                            set[1].as_array().unwrap().iter().map(move |c| {
+                                format!(
+                                    "{code}: {} -> {}",
+                                    c["claim"].as_str().unwrap(),
+                                    c["verdict"].as_str().unwrap()
+                                )
+                            })
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            let written: Vec<String> = want
+                .get(key)
+                .and_then(|v| v.as_array())
+                .map(|a| a.iter().map(|v| v.as_str().unwrap().to_string()).collect())
+                .unwrap_or_default();
+            assert!(
+                !got.is_empty() || key != "conclusions",
+                "sweep {sweep}: no conclusions"
+            );
+            assert_eq!(got, written, "sweep {sweep}, {key}");
+        }
+    }
 }

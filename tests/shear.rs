@@ -247,7 +247,7 @@ fn bad_shear_input_is_refused_with_reasons() {
         (&["--tooth-wavelength", "2e-9"], "plates.tooth_wavelength"),
         (
             &["--rolling", "epsd2", "--mu-r", "0.5", "--eta-r", "0.5"],
-            "eta_r acts only in epsd and epsd3",
+            "eta_r acts only in epsd, epsd3 and epsd_implicit",
         ),
         (
             &["--preset", "huge"],

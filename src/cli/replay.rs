@@ -86,14 +86,7 @@ pub struct ReplayArgs {
 /// The request these flags describe (validated).
 pub fn request(a: &ReplayArgs) -> Result<ReplayRequest> {
     let rolling: RollingModel = a.rolling.into();
-    for (flag, v) in [("--mu-r", a.mu_r), ("--eta-r", a.eta_r)] {
-        if !(v.is_finite() && (0.0..=10.0).contains(&v)) {
-            return Err(Error::invalid(flag, v, "a number in 0 ..= 10"));
-        }
-    }
-    if rolling == RollingModel::Off && a.mu_r > 0.0 {
-        return Err(Error::invalid("--mu-r", a.mu_r, "0 with --rolling off"));
-    }
+    crate::spec::check_rolling_point(rolling, a.mu_r, a.eta_r)?;
     if !(a.rtol.is_finite() && a.rtol > 0.0 && a.rtol < 1.0) {
         return Err(Error::invalid("--rtol", a.rtol, "0 < rtol < 1"));
     }

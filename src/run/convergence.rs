@@ -6,7 +6,9 @@ pub use super::convergence_outcome::*;
 use super::shear::ShearRequest;
 use super::sweep::run_input_hash;
 use super::utc_stamp;
-use crate::compare::{steady, steady_window, within_cis};
+use crate::compare::{
+    equivalence, equivalence_one_seed, steady, steady_window, Equivalence, Outcome,
+};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
@@ -34,13 +36,22 @@ pub struct ConvergenceRequest {
     pub with_implicit: bool,
 }
 
-/// The stored series of a run if it is current (its `.hash` file matches).
+/// The stored series of a run if it is current: its record ([`crate::fsutil::read_recorded`])
+/// names the run's input hash and the CSV's SHA-256; a series that does not verify is said so
+/// and run again.
 fn stored_series(dir: &Path, code: &str, hash: &str) -> Option<Series> {
-    let h = std::fs::read_to_string(dir.join(format!("{code}.hash"))).ok()?;
-    if h.trim() != hash {
-        return None;
+    let path = dir.join(format!("{code}.csv"));
+    match crate::fsutil::read_recorded(&path, hash) {
+        Ok(Some(_)) => Series::read_csv(&path).ok(),
+        Ok(None) => None,
+        Err(why) => {
+            eprintln!(
+                "warning: {} is not reused: {why}; run again",
+                path.display()
+            );
+            None
+        }
     }
-    Series::read_csv(&dir.join(format!("{code}.csv"))).ok()
 }
 
 /// The time step of `case` scaled by a study's factor, from the compacted state: one servo step
@@ -173,8 +184,9 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
                                 Checkpointing::Every(CHECKPOINT_EVERY),
                             )?
                         };
-                        let s = write_series(&cc, &run, &dir.join(format!("{code}.csv")))?;
-                        write_atomic(&dir.join(format!("{code}.hash")), hash.as_bytes())?;
+                        let path = dir.join(format!("{code}.csv"));
+                        let s = write_series(&cc, &run, &path)?;
+                        crate::fsutil::write_record(&path, &hash)?;
                         s
                     }
                 };
@@ -203,11 +215,16 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             stability: stability(&c),
         });
     }
-    // verdict per code: converged when its two smallest dt agree within their CIs; the
-    // study's verdict comes from the codes that ran down to the smallest factor (LIGGGHTS
-    // limited by --liggghts-dt-factors is judged, and reported, but does not decide it)
-    let agree = |x: &DtPoint, y: &DtPoint| {
-        within_cis(x.steady.mu, x.steady.mu_ci95, y.steady.mu, y.steady.mu_ci95)
+    // verdict per code: converged when its two smallest dt are equivalent (the steady mu's
+    // paired difference over seeds, each seed from one compacted state, within the margin:
+    // crate::compare::equivalence; one seed: the two block CIs); the study's verdict comes from
+    // the codes that ran down to the smallest factor (LIGGGHTS limited by
+    // --liggghts-dt-factors is judged, and reported, but does not decide it)
+    let margin = sh.mu_margin;
+    let test = |x: &DtPoint, y: &DtPoint| -> Equivalence {
+        let (a, b) = (&x.steady, &y.steady);
+        equivalence(&a.per_seed_mu, &b.per_seed_mu, margin)
+            .unwrap_or_else(|| equivalence_one_seed(a.mu, a.mu_ci95, b.mu, b.mu_ci95, margin))
     };
     let finest_factor = factors[factors.len() - 1];
     let mut per_code = Vec::new();
@@ -216,11 +233,14 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         let Some(finest) = pts.last() else {
             continue;
         };
-        let converged = pts.len() >= 2 && agree(pts[pts.len() - 2], finest);
-        // walk up from the finest dt while each step agrees with the next finer one
+        let finest_step = (pts.len() >= 2).then(|| test(pts[pts.len() - 2], finest));
+        let converged = finest_step
+            .as_ref()
+            .is_some_and(|e| e.outcome == Outcome::Agree);
+        // walk up from the finest dt while each step is equivalent to the next finer one
         let mut lc = finest.dt_factor;
         for k in (0..pts.len() - 1).rev() {
-            if agree(pts[k], pts[k + 1]) {
+            if test(pts[k], pts[k + 1]).outcome == Outcome::Agree {
                 lc = pts[k].dt_factor;
             } else {
                 break;
@@ -230,6 +250,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             code,
             finest_factor: finest.dt_factor,
             converged,
+            finest_step,
             largest_converged_factor: converged.then_some(lc),
         });
     }
@@ -238,6 +259,13 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         .filter(|v| v.finest_factor == finest_factor)
         .collect();
     let converged = !deciding.is_empty() && deciding.iter().all(|v| v.converged);
+    let inconclusive = !converged
+        && deciding.iter().all(|v| {
+            v.finest_step
+                .as_ref()
+                .is_some_and(|e| e.outcome != Outcome::Disagree)
+        })
+        && !deciding.is_empty();
     let largest = if converged {
         deciding
             .iter()
@@ -246,8 +274,8 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     } else {
         None
     };
-    // the two codes at each dt both ran: agreement within the CIs
-    let codes_agree: Vec<(f64, bool)> = factors
+    // the two codes at each dt both ran: native - LIGGGHTS, paired by seed
+    let codes_agree: Vec<(f64, Equivalence)> = factors
         .iter()
         .filter_map(|f| {
             let n = points
@@ -256,7 +284,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             let l = points
                 .iter()
                 .find(|p| p.code == StudyCode::Liggghts && p.dt_factor == *f)?;
-            Some((*f, agree(n, l)))
+            Some((*f, test(l, n)))
         })
         .collect();
     // the stable-dashpot model at the largest dt against native epsd at the smallest
@@ -265,7 +293,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         .find(|p| p.code == StudyCode::Implicit)
         .and_then(|im| {
             let finest = points.iter().rfind(|p| p.code == StudyCode::Native)?;
-            Some(agree(im, finest))
+            Some(test(finest, im))
         });
     println!(
         "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",
@@ -284,16 +312,27 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             p.stability.entries[0].criterion
         );
     }
+    let says = |e: &Equivalence| {
+        format!(
+            "{} (difference {:+.4}, 90 % CI [{:+.4}, {:+.4}], {} seed(s), margin {margin}{})",
+            e.outcome.words(),
+            e.mean,
+            e.mean - e.ci90,
+            e.mean + e.ci90,
+            e.n,
+            e.seeds_needed
+                .map(|k| format!("; about {k} seeds would decide"))
+                .unwrap_or_default()
+        )
+    };
     for v in &per_code {
         println!(
-            "  {}: down to dt factor {}: {}{}",
+            "  {}: down to dt factor {}: its two smallest dt: {}{}",
             v.code,
             v.finest_factor,
-            if v.converged {
-                "its two smallest dt agree"
-            } else {
-                "its two smallest dt differ beyond the CIs (or one dt only)"
-            },
+            v.finest_step
+                .as_ref()
+                .map_or("one dt only".to_string(), &says),
             if v.finest_factor == finest_factor {
                 ""
             } else {
@@ -301,16 +340,15 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             }
         );
     }
-    for (f, ok) in &codes_agree {
-        println!(
-            "  dt factor {f}: LIGGGHTS and native {} within the CIs",
-            if *ok { "agree" } else { "DIFFER" }
-        );
+    for (f, e) in &codes_agree {
+        println!("  dt factor {f}: native - LIGGGHTS: {}", says(e));
     }
     println!(
         "  verdict: {}; largest converged dt factor: {}",
         if converged {
-            "converged (the two smallest dt agree within their CIs)"
+            "converged (the two smallest dt are equivalent)"
+        } else if inconclusive {
+            "inconclusive (more seeds would decide)"
         } else {
             "NOT converged"
         },
@@ -318,12 +356,12 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             .map(|f| f.to_string())
             .unwrap_or_else(|| "none".into())
     );
-    if let Some(m) = implicit_matches_finest {
+    if let Some(e) = &implicit_matches_finest {
         println!(
-            "  epsd_implicit at dt factor {} {} native epsd at dt factor {} (within the CIs)",
+            "  epsd_implicit at dt factor {} - native epsd at dt factor {}: {}",
             factors[0],
-            if m { "agrees with" } else { "DIFFERS from" },
-            factors[factors.len() - 1]
+            factors[factors.len() - 1],
+            says(e)
         );
     }
     crate::report::convergence::plots(&out, &points)?;
@@ -336,6 +374,8 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         stage: case0.stages.len() - 1,
         speed: case0.stages[case0.stages.len() - 1].speed,
         converged,
+        inconclusive,
+        mu_margin: margin,
         largest_converged_factor: largest,
         per_code,
         codes_agree,

@@ -2,7 +2,7 @@
 //! report (src/report/convergence.rs) reads it without importing the study.
 
 use super::Verdict;
-use crate::compare::Steady;
+use crate::compare::{Equivalence, Steady};
 use crate::spec::shear::Preset;
 use crate::spec::stability_shear::StabilityReport;
 use crate::spec::RollingModel;
@@ -53,8 +53,11 @@ pub struct DtPoint {
 pub struct CodeVerdict {
     pub code: StudyCode,
     pub finest_factor: f64,
-    /// Its two smallest dt agree within their CIs.
+    /// Its two smallest dt are equivalent (the equivalence test `finest_step` agrees).
     pub converged: bool,
+    /// The equivalence test of the steady mu at its two smallest dt, paired by seed (the
+    /// same compacted state); None with one dt only.
+    pub finest_step: Option<Equivalence>,
     /// Largest factor from which every step to the next smaller dt agrees (when converged).
     pub largest_converged_factor: Option<f64>,
 }
@@ -72,24 +75,36 @@ pub struct ConvergenceSummary {
     /// Index and speed [m/s] of the stage whose steady window is measured (the last one).
     pub stage: usize,
     pub speed: f64,
+    /// Every deciding code's two smallest dt are equivalent within `mu_margin`.
     pub converged: bool,
-    /// Largest dt factor from which every step to the next smaller dt agrees within the CIs
-    /// (over codes: the smallest such factor).
+    /// Some deciding code's two smallest dt can be neither shown equivalent nor different by
+    /// its seeds (and none differs): the study is inconclusive (exit 3).
+    pub inconclusive: bool,
+    /// The equivalence margin of every comparison below (steady mu, absolute).
+    pub mu_margin: f64,
+    /// Largest dt factor from which every step to the next smaller dt is equivalent (over
+    /// codes: the smallest such factor).
     pub largest_converged_factor: Option<f64>,
     pub points: Vec<DtPoint>,
     /// Per code: its finest dt factor, converged there or not, its largest converged factor.
     pub per_code: Vec<CodeVerdict>,
-    /// Per dt factor where both codes ran: their steady mu agree within the CIs.
-    pub codes_agree: Vec<(f64, bool)>,
-    /// With --with-implicit: whether epsd_implicit at the largest dt agrees (within the CIs)
-    /// with the native epsd result at the smallest dt.
-    pub implicit_matches_finest: Option<bool>,
+    /// Per dt factor where both codes ran: the equivalence test of native - LIGGGHTS.
+    pub codes_agree: Vec<(f64, Equivalence)>,
+    /// With --with-implicit: the equivalence test of epsd_implicit at the largest dt against
+    /// the native epsd result at the smallest dt.
+    pub implicit_matches_finest: Option<Equivalence>,
     pub date_utc: String,
 }
 
 impl ConvergenceSummary {
     pub fn verdict(&self) -> Verdict {
-        Verdict::from_pass(self.converged)
+        if self.converged {
+            Verdict::Agree
+        } else if self.inconclusive {
+            Verdict::Inconclusive
+        } else {
+            Verdict::Disagree
+        }
     }
 }
 

@@ -507,9 +507,7 @@ pub fn plan(p: &SweepRequest) -> Result<Manifest> {
                 .flat_map(|(m, e)| [("--points", m), ("--points", e)]),
         )
     {
-        if !(v.is_finite() && *v >= 0.0) {
-            return Err(Error::invalid(flag, v, "finite numbers >= 0"));
-        }
+        crate::spec::check_coefficient(flag, *v)?;
     }
     if p.jobs == 0 || p.jobs > 256 {
         return Err(Error::invalid("--jobs", p.jobs, "1 ..= 256"));

@@ -412,16 +412,11 @@ impl CaseFile {
                 "a LIGGGHTS model (contact cases compare with LIGGGHTS): off, cdt, epsd, epsd2, epsd3",
             ));
         }
-        if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {
-            return Err(Error::invalid(
-                "material.rolling_damping",
-                m.rolling_damping,
-                format!(
-                    "0 with rolling model `{}` (eta_r acts only in epsd and epsd3)",
-                    self.models.rolling
-                ),
-            ));
-        }
+        check_damping_model(
+            "material.rolling_damping",
+            m.rolling_damping,
+            self.models.rolling,
+        )?;
         positive("dt", self.dt)?;
         if self.steps == 0 || self.steps > 100_000_000 {
             return Err(Error::invalid("steps", self.steps, "1 ..= 100000000"));
@@ -573,13 +568,11 @@ impl CaseFile {
             ));
         }
         for r in self.applicable_rolling() {
-            if m.rolling_damping > 0.0 && !r.has_damping() {
-                return Err(Error::invalid(
-                    "rolling_models",
-                    r,
-                    "models with damping (epsd, epsd3) when material.rolling_damping > 0",
-                ));
-            }
+            check_damping_model(
+                &format!("material.rolling_damping (with rolling_models `{r}`)"),
+                m.rolling_damping,
+                r,
+            )?;
         }
         Ok(Case {
             file: self,
@@ -675,6 +668,35 @@ pub(crate) fn positive(field: &str, v: f64) -> Result<()> {
         Err(Error::invalid(field, v, "a finite number > 0"))
     }
 }
+/// The one rule for eta_r against the rolling model: the rolling damping acts only in the
+/// models with a dashpot ([`RollingModel::has_damping`]); elsewhere it must be 0.
+pub fn check_damping_model(field: &str, eta_r: f64, rolling: RollingModel) -> Result<()> {
+    if eta_r > 0.0 && !rolling.has_damping() {
+        Err(Error::invalid(
+            field,
+            eta_r,
+            format!(
+                "0 with rolling model `{rolling}` (eta_r acts only in epsd, epsd3 and \
+                 epsd_implicit)"
+            ),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// The one rule for the rolling coefficients of a requested point (`--mu-r`, `--eta-r` of
+/// shear, convergence, replay and sweep runs): each a coefficient ([`check_coefficient`]),
+/// mu_r 0 without a rolling model, eta_r only with a dashpot ([`check_damping_model`]).
+pub fn check_rolling_point(rolling: RollingModel, mu_r: f64, eta_r: f64) -> Result<()> {
+    check_coefficient("--mu-r", mu_r)?;
+    check_coefficient("--eta-r", eta_r)?;
+    if rolling == RollingModel::Off && mu_r > 0.0 {
+        return Err(Error::invalid("--mu-r", mu_r, "0 with --rolling off"));
+    }
+    check_damping_model("--eta-r", eta_r, rolling)
+}
+
 /// The one rule for a friction, rolling friction or rolling damping coefficient: finite, in
 /// 0 ..= [`MAX_FRICTION`] (far beyond any granular material: the rolling stiffness grows as
 /// mu_r^2, and mu_r = 1e9 blows a run up within steps; eta_r is a fraction of critical
@@ -822,6 +844,9 @@ mod tests {
         c.rolling_models.clear();
         c.material.rolling_damping = 0.3;
         let e = err_of(c);
-        assert!(e.contains("eta_r acts only in epsd and epsd3"), "{e}");
+        assert!(
+            e.contains("eta_r acts only in epsd, epsd3 and epsd_implicit"),
+            "{e}"
+        );
     }
 }

@@ -351,12 +351,7 @@ impl ShearCase {
     /// Returns the case and its warnings.
     pub fn build(r: &CaseRequest) -> Result<(Self, Vec<String>)> {
         // before the case's name is made of them
-        for (flag, v) in [("--mu-r", r.mu_r), ("--eta-r", r.eta_r)] {
-            crate::spec::check_coefficient(flag, v)?;
-        }
-        if r.rolling == RollingModel::Off && r.mu_r > 0.0 {
-            return Err(Error::invalid("--mu-r", r.mu_r, "0 with --rolling off"));
-        }
+        crate::spec::check_rolling_point(r.rolling, r.mu_r, r.eta_r)?;
         let mut c = ShearCase::preset(r.preset, r.rolling, r.mu_r, r.eta_r, r.seed)?;
         let pr = &r.protocol;
         if let Some(speeds) = &pr.speeds {
@@ -649,16 +644,11 @@ impl ShearCase {
         }
         let m = &self.material;
         m.validate(true)?;
-        if m.rolling_damping > 0.0 && !self.models.rolling.has_damping() {
-            return Err(Error::invalid(
-                "material.rolling_damping (--eta-r)",
-                m.rolling_damping,
-                format!(
-                    "0 with rolling model `{}`: eta_r acts only in epsd and epsd3",
-                    self.models.rolling
-                ),
-            ));
-        }
+        crate::spec::check_damping_model(
+            "material.rolling_damping (--eta-r)",
+            m.rolling_damping,
+            self.models.rolling,
+        )?;
         positive("dt", self.dt)?;
         let t_r = super::rayleigh_time(m, rmin);
         if self.dt > t_r {
@@ -794,7 +784,10 @@ mod tests {
     fn eta_r_with_epsd2_is_refused() {
         let c = ShearCase::preset(Preset::Ci, RollingModel::Epsd2, 0.5, 0.5, 1).unwrap();
         let e = c.validate(false).unwrap_err().to_string();
-        assert!(e.contains("eta_r acts only in epsd and epsd3"), "{e}");
+        assert!(
+            e.contains("eta_r acts only in epsd, epsd3 and epsd_implicit"),
+            "{e}"
+        );
     }
 
     #[test]
