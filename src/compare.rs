@@ -722,6 +722,24 @@ pub fn equivalence(a: &[f64], b: &[f64], margin: f64) -> Option<Equivalence> {
     })
 }
 
+impl Equivalence {
+    /// The test's figures in one phrase: the difference, its 90 % CI as an interval, the seeds,
+    /// and for an inconclusive test the seeds that would decide ("+0.0035, 90 % CI [-0.0206,
+    /// +0.0276] over 3 seed(s)").
+    pub fn figures(&self) -> String {
+        format!(
+            "{:+.4}, 90 % CI [{:+.4}, {:+.4}] over {} seed(s){}",
+            self.mean,
+            self.mean - self.ci90,
+            self.mean + self.ci90,
+            self.n,
+            self.seeds_needed
+                .map(|k| format!(", about {k} seeds would decide"))
+                .unwrap_or_default()
+        )
+    }
+}
+
 /// The equivalence test of one seed: the difference of the two window means, its CI the root
 /// sum of squares of the codes' 95 % CIs from block means (wider than a 90 % CI: one seed's
 /// block means are correlated, so this errs towards "inconclusive").

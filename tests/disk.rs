@@ -528,3 +528,47 @@ fn a_run_larger_than_the_memory_it_may_use_is_refused_with_its_estimate() {
         text(&r)
     );
 }
+
+/// A convergence study's `--dry-run` checks the study's own rules as its run does, and counts
+/// what the run runs: the compaction once per seed, then every (seed, dt factor, code) from
+/// that state with one servo step (it counted the compaction again at every factor, scaled
+/// by 1/factor).
+#[test]
+fn a_convergence_plan_is_the_runs_list() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("c.toml");
+    let plan = |opts: &str| {
+        std::fs::write(
+            &study,
+            format!("version = 1\ncommand = \"convergence\"\n[options]\npreset = \"ci\"\n{opts}\n"),
+        )
+        .unwrap();
+        verify(&["run", study.to_str().unwrap(), "--dry-run"])
+    };
+    let o = plan("dt_factors = [1, 1]");
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("--dt-factors") && text(&o).contains("distinct"));
+    let o = plan("dt_factors = [1, 0.5]\nseeds = 2\nfirst_seed = 4");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    // 2 compactions + 2 seeds x 2 factors, native
+    assert!(t.contains("plan (verify convergence): 6 run(s)"), "{t}");
+    let steps = |t: &str| -> u64 {
+        let s = t.split(" steps in all").next().unwrap();
+        s.rsplit(' ').next().unwrap().parse().unwrap()
+    };
+    // halving dt doubles the shear steps only: two factors cost 3 shear runs' steps, and the
+    // compaction once per seed, not once per factor
+    let one = plan("dt_factors = [1, 0.5]\nseeds = 1");
+    let both = steps(&text(&one));
+    let o = plan("dt_factors = [1, 0.25]\nseeds = 1");
+    let quarter = steps(&text(&o));
+    assert!(quarter > both, "{quarter} vs {both}");
+    // compaction + s + 2s = both; compaction + s + 4s = quarter -> s = (quarter - both) / 2
+    let s = (quarter - both) / 2;
+    let compaction = both - 3 * s;
+    assert!(
+        compaction > 0 && compaction < s,
+        "compaction {compaction} steps once, shear {s} (+1 servo step per run)"
+    );
+}

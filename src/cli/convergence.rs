@@ -30,6 +30,18 @@ pub struct ConvergenceArgs {
     pub with_implicit: bool,
 }
 
+impl ConvergenceArgs {
+    /// The request these flags describe (what the run and a study's plan use).
+    pub fn request(&self) -> ConvergenceRequest {
+        ConvergenceRequest {
+            shear: self.case.request(self.engine.into(), "convergence"),
+            dt_factors: self.dt_factors.clone(),
+            liggghts_dt_factors: self.liggghts_dt_factors.clone(),
+            with_implicit: self.with_implicit,
+        }
+    }
+}
+
 pub fn convergence(a: ConvergenceArgs) -> Result<Verdict> {
     if a.case.native_only || a.case.liggghts_only {
         return Err(Error::invalid(
@@ -38,11 +50,5 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Verdict> {
             "--engine native|liggghts|both for verify convergence",
         ));
     }
-    let req = ConvergenceRequest {
-        shear: a.case.request(a.engine.into(), "convergence"),
-        dt_factors: a.dt_factors.clone(),
-        liggghts_dt_factors: a.liggghts_dt_factors.clone(),
-        with_implicit: a.with_implicit,
-    };
-    Ok(run(&req)?.verdict())
+    Ok(run(&a.request())?.verdict())
 }

@@ -2,6 +2,7 @@
 //! returns an [`Outcome`]. `main` maps outcomes to exit codes: 0 agree, 1 disagree, 2 error.
 
 pub mod bench;
+pub mod contact;
 pub mod convergence;
 pub mod nightly;
 pub mod replay;
@@ -9,17 +10,11 @@ pub mod shear;
 pub mod study;
 pub mod sweep;
 
-use crate::compare::CONTACT_RTOL;
 use crate::error::{Error, Result};
-use crate::liggghts::Liggghts;
-use crate::report::{channel_table, worst_table};
-use crate::run::contact::{
-    check_reference_target, contact_runs, read_reference_version, run_all, write_decks,
-    ContactRequest, RollingChoice,
-};
-use crate::run::{out_or_default, Engine, LiggghtsRequest, Verdict, CONTACT_TIMEOUT_S};
+use crate::run::contact::write_decks;
+use crate::run::{Engine, LiggghtsRequest, Verdict};
 use crate::spec::shear::Preset;
-use crate::spec::{builtin_case, RollingModel, BUILTIN_CASES};
+use crate::spec::RollingModel;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::PathBuf;
 
@@ -145,7 +140,7 @@ pub enum Command {
         verify contact --reference                       # every case against the stored LIGGGHTS outputs\n  \
         verify contact --spec my_case.toml --rolling epsd2\n\n\
         Exit status: 0 agree, 1 disagree, 2 error.")]
-    Contact(ContactArgs),
+    Contact(contact::ContactArgs),
     /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
     #[command(after_help = "Examples:\n  \
         verify shear --mu-r 0.5 --eta-r 0.5 --preset ci   # both codes, 3 seeds, minutes\n  \
@@ -206,44 +201,10 @@ pub enum Command {
     Run(study::RunArgs),
 }
 
-#[derive(Args, Debug)]
-pub struct ContactArgs {
-    /// Built-in case name, or `all`.
-    #[arg(long, default_value = "all", conflicts_with = "spec")]
-    pub case: String,
-    /// A case file (TOML) of your own instead of a built-in case.
-    #[arg(long)]
-    pub spec: Option<PathBuf>,
-    /// Rolling model: off, cdt, epsd, epsd2, epsd3, or `all` (those the case lists).
-    #[arg(long, default_value = "all")]
-    pub rolling: String,
-    /// Relative tolerance: max |error| / channel peak.
-    #[arg(long, default_value_t = CONTACT_RTOL)]
-    pub rtol: f64,
-    /// Output directory (default: a new directory under ./runs/).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Compare against the stored LIGGGHTS outputs in reference/ instead of running LIGGGHTS.
-    #[arg(long)]
-    pub reference: bool,
-    /// Run LIGGGHTS and store its outputs as the new reference (with provenance).
-    #[arg(long, conflicts_with = "reference")]
-    pub update_reference: bool,
-    /// Directory of stored reference outputs (default: $DEM_VERIFY_REFERENCE, else the
-    /// repository's reference/ this binary was built from).
-    #[arg(long)]
-    pub reference_dir: Option<PathBuf>,
-    /// List the built-in cases and exit.
-    #[arg(long)]
-    pub list: bool,
-    #[command(flatten)]
-    pub liggghts: LiggghtsArgs,
-}
-
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<Verdict> {
     match cli.command {
-        Command::Contact(a) => contact(a),
+        Command::Contact(a) => contact::contact(a),
         Command::Shear(a) => shear::shear(a),
         Command::Bench(a) => bench::bench(a),
         Command::Replay(a) => replay::replay(a),
@@ -274,100 +235,4 @@ pub fn run(cli: Cli) -> Result<Verdict> {
             Ok(Verdict::Done)
         }
     }
-}
-
-fn contact(a: ContactArgs) -> Result<Verdict> {
-    if a.list {
-        for (name, _) in BUILTIN_CASES {
-            let c = builtin_case(name)?;
-            let models: Vec<&str> = c.applicable_rolling().iter().map(|m| m.keyword()).collect();
-            println!("{name:<22} [{}] {}", models.join(","), c.description);
-        }
-        return Ok(Verdict::Done);
-    }
-    if !(a.rtol.is_finite() && a.rtol > 0.0) {
-        return Err(Error::invalid("--rtol", a.rtol, "a finite number > 0"));
-    }
-    let rolling = match a.rolling.as_str() {
-        "all" => RollingChoice::All,
-        m => RollingChoice::One(RollingModel::parse_liggghts(m)?),
-    };
-    let runs = contact_runs(&a.case, a.spec.as_deref(), rolling)?;
-    let reference_dir = match &a.reference_dir {
-        Some(d) => d.clone(),
-        None => crate::run::default_reference_dir()?,
-    };
-    if a.update_reference {
-        for c in &runs {
-            check_reference_target(&c.name, a.spec.is_some())?;
-        }
-    }
-    let lig: Option<Liggghts> = if a.reference {
-        None
-    } else {
-        Some(a.liggghts.request(CONTACT_TIMEOUT_S).locate()?)
-    };
-    let req = ContactRequest {
-        rtol: a.rtol,
-        reference_dir: reference_dir.clone(),
-        update_reference: a.update_reference,
-    };
-    let version = match &lig {
-        Some(l) => l.version(),
-        None => read_reference_version(&reference_dir),
-    };
-    let out = out_or_default(a.out.as_deref(), "contact");
-    println!(
-        "verify contact: {} run(s), against {}, rtol {:e}, output {}",
-        runs.len(),
-        if a.reference {
-            "stored reference"
-        } else {
-            "live LIGGGHTS"
-        },
-        a.rtol,
-        out.display()
-    );
-    for case in &runs {
-        for w in &case.warnings {
-            eprintln!("warning: {}/{}: {w}", case.name, case.models.rolling);
-        }
-    }
-    let against = if a.reference { "reference" } else { "live" };
-    let summary = run_all(
-        &runs,
-        &req,
-        lig.as_ref(),
-        &out,
-        against,
-        version,
-        |case, results, secs| {
-            let results = match results {
-                Ok(r) => r,
-                Err(e) => {
-                    println!(
-                        "{:<22} {:<6} ERROR ({secs:.1} s): {e}",
-                        case.name,
-                        case.models.rolling.keyword()
-                    );
-                    return;
-                }
-            };
-            let pass = results.iter().all(|r| r.pass);
-            let worst = results.iter().map(|r| r.max_rel_err).fold(0.0, f64::max);
-            println!(
-                "{:<22} {:<6} max rel err {:>10.3e}  {}  ({secs:.1} s)",
-                case.name,
-                case.models.rolling.keyword(),
-                worst,
-                if pass { "agree" } else { "DISAGREE" },
-            );
-            if !pass {
-                print!("{}", channel_table(results));
-            }
-        },
-    )?;
-    println!("\n{}", worst_table(&summary));
-    println!("summary: {}", out.join("summary.json").display());
-    Ok(Verdict::from_pass(summary.pass))
 }

@@ -22,6 +22,7 @@
 use super::{Cli, Command};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
+use crate::run::convergence::StudyCode;
 use crate::run::{Engine, Verdict};
 use crate::solver::shear::pairs::KernelPath;
 use crate::spec::shear::{CaseRequest, Overrides, ShearCase};
@@ -337,26 +338,21 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
             Some((Plan::of(&runs)?, "verify shear".into()))
         }
         Command::Convergence(a) => {
-            let req = a.case.request(a.engine.into(), "convergence");
+            // the study's own list of runs, and its compaction once per seed (native, at the
+            // preset's dt, shared by every factor and code)
+            let req = a.request();
             req.validate()?;
             let mut runs = Vec::new();
-            for s in req.seed_range() {
-                let (c, _) = req.seed_case(s)?;
-                for &f in &a.dt_factors {
-                    let cf = c.clone().scale_dt("--dt-factors", f)?;
-                    for code in codes(req.engine) {
-                        let lig_ok = a
-                            .liggghts_dt_factors
-                            .as_ref()
-                            .is_none_or(|l| l.contains(&f));
-                        if code != Engine::Liggghts || lig_ok {
-                            runs.push((code, cf.clone()));
-                        }
-                    }
-                }
-                if a.with_implicit {
-                    runs.push((Engine::Native, c.clone()));
-                }
+            for seed in req.shear.seed_range() {
+                let (c, _) = req.shear.seed_case(seed)?;
+                runs.push((Engine::Native, c.compaction_only()));
+            }
+            for (_, code, _, c) in req.planned_runs()? {
+                let engine = match code {
+                    StudyCode::Liggghts => Engine::Liggghts,
+                    StudyCode::Native | StudyCode::Implicit => Engine::Native,
+                };
+                runs.push((engine, c));
             }
             Some((Plan::of(&runs)?, "verify convergence".into()))
         }

@@ -57,16 +57,7 @@ fn sci(v: f64) -> String {
 /// before the equivalence test show the difference of the means and whether the CIs overlap.
 fn mu_measured(r: &ShearRow) -> String {
     match &r.mu_equivalence {
-        Some(eq) => format!(
-            "paired Δμ = {:+.4}, 90 % CI [{:+.4}, {:+.4}] over {} seed(s){}",
-            eq.mean,
-            eq.mean - eq.ci90,
-            eq.mean + eq.ci90,
-            eq.n,
-            eq.seeds_needed
-                .map(|k| format!(", about {k} seeds would decide"))
-                .unwrap_or_default()
-        ),
+        Some(eq) => format!("paired Δμ = {}", eq.figures()),
         None => format!(
             "|Δμ| = {}{}",
             num(r.dmu, 4),

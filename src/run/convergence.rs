@@ -63,58 +63,112 @@ fn at_factor(case: &ShearCase, f: f64) -> Result<ShearCase> {
     Ok(c)
 }
 
-/// Runs the study (reusing every stored current run), prints its table, writes plots and
-/// `summary.json`.
-pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
-    let mut distinct = a.dt_factors.clone();
-    distinct.sort_by(f64::total_cmp);
-    distinct.dedup();
-    if distinct.len() < 2
-        || distinct.len() != a.dt_factors.len()
-        || a.dt_factors
-            .iter()
-            .any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0))
-    {
-        // a study of one dt (or a factor twice) compares a run with itself: no verdict
-        return Err(Error::invalid(
-            "--dt-factors",
-            format!("{:?}", a.dt_factors),
-            "two or more distinct factors in (0, 1], e.g. 1,0.5,0.25",
-        ));
-    }
-    let sh = &a.shear;
-    if sh.case.protocol.dt_factor != 1.0 {
-        return Err(Error::invalid(
+impl ConvergenceRequest {
+    /// The study's own rules (the run and a study's `--dry-run` plan call this one function):
+    /// the shear request's, two or more distinct dt factors in (0, 1], the protocol's dt factor
+    /// 1, `--with-implicit` with epsd only, LIGGGHTS' factors a subset of the study's.
+    pub fn validate(&self) -> Result<()> {
+        self.shear.validate()?;
+        let mut distinct = self.dt_factors.clone();
+        distinct.sort_by(f64::total_cmp);
+        distinct.dedup();
+        if distinct.len() < 2
+            || distinct.len() != self.dt_factors.len()
+            || self
+                .dt_factors
+                .iter()
+                .any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0))
+        {
+            // a study of one dt (or a factor twice) compares a run with itself: no verdict
+            return Err(Error::invalid(
+                "--dt-factors",
+                format!("{:?}", self.dt_factors),
+                "two or more distinct factors in (0, 1], e.g. 1,0.5,0.25",
+            ));
+        }
+        let sh = &self.shear;
+        if sh.case.protocol.dt_factor != 1.0 {
+            return Err(Error::invalid(
             "--dt-factor",
             sh.case.protocol.dt_factor,
             "1 with verify convergence: its time steps are --dt-factors (the two would multiply)",
         ));
-    }
-    if a.with_implicit && sh.case.rolling != RollingModel::Epsd {
-        return Err(Error::invalid(
-            "--with-implicit",
-            sh.case.rolling,
-            "--rolling epsd (epsd_implicit is the stable-dashpot variant of epsd)",
-        ));
-    }
-    if let Some(lf) = &a.liggghts_dt_factors {
-        if lf.is_empty() || lf.iter().any(|f| !a.dt_factors.contains(f)) {
+        }
+        if self.with_implicit && sh.case.rolling != RollingModel::Epsd {
             return Err(Error::invalid(
-                "--liggghts-dt-factors",
-                format!("{lf:?}"),
-                format!("a non-empty subset of --dt-factors {:?}", a.dt_factors),
+                "--with-implicit",
+                sh.case.rolling,
+                "--rolling epsd (epsd_implicit is the stable-dashpot variant of epsd)",
             ));
         }
+        if let Some(lf) = &self.liggghts_dt_factors {
+            if lf.is_empty() || lf.iter().any(|f| !self.dt_factors.contains(f)) {
+                return Err(Error::invalid(
+                    "--liggghts-dt-factors",
+                    format!("{lf:?}"),
+                    format!("a non-empty subset of --dt-factors {:?}", self.dt_factors),
+                ));
+            }
+        }
+        Ok(())
     }
-    let (run_nat, run_lig) = (sh.engine.runs_native(), sh.engine.runs_liggghts());
-    let lig = if run_lig {
+
+    /// The dt factors, largest first (the order the study runs and reports them).
+    pub fn factors(&self) -> Vec<f64> {
+        let mut f = self.dt_factors.clone();
+        f.sort_by(|x, y| y.total_cmp(x));
+        f
+    }
+
+    /// Every run of the study, in the order it runs them (seed by seed, each from one
+    /// compacted state; the factors largest first; per factor native, LIGGGHTS where asked,
+    /// and epsd_implicit at the largest factor): the seed, the code, the factor and the case
+    /// as it runs. What the study runs and what a plan counts are this one list.
+    pub fn planned_runs(&self) -> Result<Vec<(u64, StudyCode, f64, ShearCase)>> {
+        let sh = &self.shear;
+        let (run_nat, run_lig) = (sh.engine.runs_native(), sh.engine.runs_liggghts());
+        let factors = self.factors();
+        let lig_factors = self
+            .liggghts_dt_factors
+            .clone()
+            .unwrap_or_else(|| factors.clone());
+        let mut runs = Vec::new();
+        for seed in sh.seed_range() {
+            let (case, _) = sh.seed_case(seed)?;
+            for &f in &factors {
+                let c = at_factor(&case, f)?;
+                for code in StudyCode::ALL {
+                    let on = match code {
+                        StudyCode::Native => run_nat,
+                        StudyCode::Liggghts => run_lig && lig_factors.contains(&f),
+                        StudyCode::Implicit => self.with_implicit && f == factors[0],
+                    };
+                    if on {
+                        let mut cc = c.clone();
+                        if code == StudyCode::Implicit {
+                            cc.models.rolling = RollingModel::EpsdImplicit;
+                        }
+                        runs.push((seed, code, f, cc));
+                    }
+                }
+            }
+        }
+        Ok(runs)
+    }
+}
+
+/// Runs the study (reusing every stored current run), prints its table, writes plots and
+/// `summary.json`.
+pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
+    a.validate()?;
+    let sh = &a.shear;
+    let lig = if sh.engine.runs_liggghts() {
         Some(sh.liggghts.locate()?)
     } else {
         None
     };
     let out = sh.out.clone();
-    let mut factors = a.dt_factors.clone();
-    factors.sort_by(|x, y| y.total_cmp(x));
+    let factors = a.factors();
     println!(
         "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
         sh.case.preset,
@@ -122,82 +176,64 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         sh.seeds,
         out.display()
     );
-    let lig_factors = a
-        .liggghts_dt_factors
-        .clone()
-        .unwrap_or_else(|| factors.clone());
     // per seed: the compacted state at the preset's dt (native), shared by every dt and code;
     // a run whose current series is stored (same input hash) is not run again
     let mut per: Vec<(StudyCode, f64, Vec<Series>)> = Vec::new();
-    for seed in 1..=sh.seeds {
-        let (case, _) = sh.seed_case(seed)?;
-        let loose = loose_packing(&case);
-        let mut state = None;
-        for &f in &factors {
-            let c = at_factor(&case, f)?;
-            let dir = out.join(format!("dt{f}")).join(format!("seed{seed}"));
-            std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-            for code in StudyCode::ALL {
-                let on = match code {
-                    StudyCode::Native => run_nat,
-                    StudyCode::Liggghts => run_lig && lig_factors.contains(&f),
-                    StudyCode::Implicit => a.with_implicit && f == factors[0],
-                };
-                if !on {
-                    continue;
-                }
-                let mut cc = c.clone();
-                if code == StudyCode::Implicit {
-                    cc.models.rolling = RollingModel::EpsdImplicit;
-                }
-                let hash = run_input_hash(&cc, code.keyword())?;
-                let s = match stored_series(&dir, code.keyword(), &hash) {
-                    Some(s) => {
-                        println!("  seed {seed}, dt factor {f}, {code}: current result kept");
-                        s
-                    }
-                    None => {
-                        if state.is_none() {
-                            state = Some(compact(&case, &loose, case.compression_steps)?);
-                        }
-                        let state = state.as_ref().expect("compacted");
-                        println!(
-                            "  seed {seed}, dt factor {f} ({:e} s), {code}: {} steps",
-                            cc.dt,
-                            cc.total_steps()
-                        );
-                        let run = if code == StudyCode::Liggghts {
-                            run_liggghts(
-                                &cc,
-                                state,
-                                lig.as_ref().expect("located"),
-                                &dir,
-                                &Progress::hidden(),
-                                Checkpointing::Every(CHECKPOINT_EVERY),
-                            )?
-                        } else {
-                            run_native(
-                                &cc,
-                                state,
-                                &dir,
-                                &Progress::hidden(),
-                                Checkpointing::Every(CHECKPOINT_EVERY),
-                            )?
-                        };
-                        let path = dir.join(format!("{code}.csv"));
-                        let s = write_series(&cc, &run, &path)?;
-                        crate::fsutil::write_record(&path, &hash)?;
-                        s
-                    }
-                };
-                match per.iter_mut().find(|p| p.0 == code && p.1 == f) {
-                    Some(p) => p.2.push(s),
-                    None => per.push((code, f, vec![s])),
-                }
+    let mut seed_state: Option<(u64, ShearCase, Option<crate::packing::Packing>)> = None;
+    for (seed, code, f, cc) in a.planned_runs()? {
+        if seed_state.as_ref().is_none_or(|s| s.0 != seed) {
+            seed_state = Some((seed, sh.seed_case(seed)?.0, None));
+        }
+        let (_, case, state) = seed_state.as_mut().expect("set above");
+        let dir = out.join(format!("dt{f}")).join(format!("seed{seed}"));
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let hash = run_input_hash(&cc, code.keyword())?;
+        let s = match stored_series(&dir, code.keyword(), &hash) {
+            Some(s) => {
+                println!("  seed {seed}, dt factor {f}, {code}: current result kept");
+                s
             }
+            None => {
+                if state.is_none() {
+                    let loose = loose_packing(case);
+                    *state = Some(compact(case, &loose, case.compression_steps)?);
+                }
+                let state = state.as_ref().expect("compacted");
+                println!(
+                    "  seed {seed}, dt factor {f} ({:e} s), {code}: {} steps",
+                    cc.dt,
+                    cc.total_steps()
+                );
+                let run = if code == StudyCode::Liggghts {
+                    run_liggghts(
+                        &cc,
+                        state,
+                        lig.as_ref().expect("located"),
+                        &dir,
+                        &Progress::hidden(),
+                        Checkpointing::Every(CHECKPOINT_EVERY),
+                    )?
+                } else {
+                    run_native(
+                        &cc,
+                        state,
+                        &dir,
+                        &Progress::hidden(),
+                        Checkpointing::Every(CHECKPOINT_EVERY),
+                    )?
+                };
+                let path = dir.join(format!("{code}.csv"));
+                let s = write_series(&cc, &run, &path)?;
+                crate::fsutil::write_record(&path, &hash)?;
+                s
+            }
+        };
+        match per.iter_mut().find(|p| p.0 == code && p.1 == f) {
+            Some(p) => p.2.push(s),
+            None => per.push((code, f, vec![s])),
         }
     }
-    let (case0, _) = sh.seed_case(1)?;
+    let (case0, _) = sh.seed_case(sh.case.seed)?;
     let mut points = Vec::new();
     for (code, f, series) in &per {
         let mut c = at_factor(&case0, *f)?;
@@ -314,15 +350,9 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     }
     let says = |e: &Equivalence| {
         format!(
-            "{} (difference {:+.4}, 90 % CI [{:+.4}, {:+.4}], {} seed(s), margin {margin}{})",
+            "{} (difference {}; margin {margin})",
             e.outcome.words(),
-            e.mean,
-            e.mean - e.ci90,
-            e.mean + e.ci90,
-            e.n,
-            e.seeds_needed
-                .map(|k| format!("; about {k} seeds would decide"))
-                .unwrap_or_default()
+            e.figures()
         )
     };
     for v in &per_code {

@@ -452,6 +452,15 @@ impl ShearCase {
         Ok(self)
     }
 
+    /// The case's compaction alone (no shear stage): what a study that compacts once and
+    /// shears from that state at several settings runs first (a plan counts its steps).
+    pub fn compaction_only(&self) -> Self {
+        let mut c = self.clone();
+        c.stages.clear();
+        c.snapshot_every = 0;
+        c
+    }
+
     /// The case with normal restitution `e` (LIGGGHTS: 0.05 < e <= 1), its name marked with
     /// it. The one place a command-line `--restitution` is applied.
     pub fn with_restitution(mut self, flag: &str, e: f64) -> Result<Self> {
