@@ -572,3 +572,38 @@ fn a_convergence_plan_is_the_runs_list() {
         "compaction {compaction} steps once, shear {s} (+1 servo step per run)"
     );
 }
+
+/// A sweep's `--dry-run` plans the manifest the sweep would store (its checks, its runs, each
+/// case as the run builds it) without writing it.
+#[test]
+fn a_sweep_plan_is_its_manifest_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let study = dir.path().join("s.toml");
+    let out = dir.path().join("sweep");
+    let plan = |opts: &str| {
+        std::fs::write(
+            &study,
+            format!(
+                "version = 1\ncommand = \"sweep\"\n[options]\npreset = \"ci\"\nout = \"{}\"\n{opts}\n",
+                out.display()
+            ),
+        )
+        .unwrap();
+        verify(&["run", study.to_str().unwrap(), "--dry-run"])
+    };
+    for (opts, field, valid) in [
+        ("mu_r = [0]\neta_r = [0]\njobs = 0", "--jobs", "1 ..= 256"),
+        ("mu_r = [0, 0]\neta_r = [0]", "--mu-r/--eta-r", "distinct"),
+        ("mu_r = [11]\neta_r = [0]", "--mu-r", "0 ..= 10"),
+    ] {
+        let o = plan(opts);
+        let t = text(&o);
+        assert_eq!(o.status.code(), Some(2), "{opts}: {t}");
+        assert!(t.contains(field) && t.contains(valid), "{opts}: {t}");
+    }
+    let o = plan("mu_r = [0, 1]\neta_r = [0, 0.5]\nseeds = 2");
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{t}");
+    assert!(t.contains("plan (verify sweep): 8 run(s)"), "{t}");
+    assert!(!out.exists(), "a dry run wrote {}", out.display());
+}

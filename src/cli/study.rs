@@ -25,7 +25,7 @@ use crate::fsutil::write_atomic;
 use crate::run::convergence::StudyCode;
 use crate::run::{Engine, Verdict};
 use crate::solver::shear::pairs::KernelPath;
-use crate::spec::shear::{CaseRequest, Overrides, ShearCase};
+use crate::spec::shear::ShearCase;
 use clap::{ArgAction, ArgMatches, Args, CommandFactory, FromArgMatches};
 use std::path::{Path, PathBuf};
 
@@ -357,31 +357,13 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
             Some((Plan::of(&runs)?, "verify convergence".into()))
         }
         Command::Sweep(a) if a.action.is_none() => {
-            let p = &a.plan;
-            let points: Vec<(f64, f64)> = p.points.clone().unwrap_or_else(|| {
-                p.mu_r
-                    .iter()
-                    .flat_map(|&m| p.eta_r.iter().map(move |&e| (m, e)))
-                    .collect()
-            });
+            // the manifest the sweep would store, each run's case as the run builds it
+            let m = a.plan.request(PathBuf::new()).manifest()?;
             let mut runs = Vec::new();
-            for &(mu_r, eta_r) in &points {
-                {
-                    for seed in 1..=p.seeds {
-                        let (c, _) = ShearCase::build(&CaseRequest {
-                            preset: p.preset.into(),
-                            rolling: p.rolling.into(),
-                            mu_r,
-                            eta_r,
-                            seed,
-                            protocol: (&p.protocol).into(),
-                            overrides: Overrides::default(),
-                            allow_inertial: false,
-                        })?;
-                        for code in codes(p.engine.into()) {
-                            runs.push((code, c.clone()));
-                        }
-                    }
+            for r in &m.runs {
+                let c = crate::run::sweep::run_case(&m.base, r)?;
+                for code in codes(m.base.engine) {
+                    runs.push((code, c.clone()));
                 }
             }
             Some((Plan::of(&runs)?, "verify sweep".into()))

@@ -169,26 +169,33 @@ fn stage_line(r: &RunResult) -> String {
         .join("; ")
 }
 
+impl PlanArgs {
+    /// The request these flags describe, into `out` (what the sweep and a study's plan use).
+    pub fn request(&self, out: PathBuf) -> SweepRequest {
+        SweepRequest {
+            base: SweepBase {
+                preset: self.preset.into(),
+                rolling: self.rolling.into(),
+                engine: self.engine.into(),
+                protocol: (&self.protocol).into(),
+            },
+            mu_r: self.mu_r.clone(),
+            eta_r: self.eta_r.clone(),
+            points: self.points.clone(),
+            seeds: self.seeds,
+            out,
+            jobs: self.jobs,
+            threads: self.threads,
+        }
+    }
+}
+
 fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
     let out = p
         .out
         .clone()
         .ok_or_else(|| Error::invalid("--out", "(missing)", "the sweep directory (required)"))?;
-    let req = SweepRequest {
-        base: SweepBase {
-            preset: p.preset.into(),
-            rolling: p.rolling.into(),
-            engine: p.engine.into(),
-            protocol: (&p.protocol).into(),
-        },
-        mu_r: p.mu_r.clone(),
-        eta_r: p.eta_r.clone(),
-        points: p.points.clone(),
-        seeds: p.seeds,
-        out: out.clone(),
-        jobs: p.jobs,
-        threads: p.threads,
-    };
+    let req = p.request(out.clone());
     let m = plan(&req)?;
     let mpath = out.join("manifest.json");
     let points = match &p.points {

@@ -211,8 +211,7 @@ pub fn shear_request(base: &SweepBase, r: &RunSpec, dir: &Path, threads: usize) 
 }
 
 fn input_hash(base: &SweepBase, r: &RunSpec) -> Result<String> {
-    let (case, _) = shear_request(base, r, Path::new("."), 1).seed_case(r.seed)?;
-    case_hash(&case, base.engine)
+    case_hash(&run_case(base, r)?, base.engine)
 }
 
 /// The input hash of a seed's case run by `engine`.
@@ -492,37 +491,55 @@ pub struct SweepRequest {
     pub threads: Option<usize>,
 }
 
+impl SweepRequest {
+    /// The manifest this request describes, validated (each run's case built once), without
+    /// touching the disk: what [`plan`] stores and a study's `--dry-run` plan counts.
+    pub fn manifest(&self) -> Result<Manifest> {
+        let p = self;
+        for (flag, v) in p
+            .mu_r
+            .iter()
+            .map(|v| ("--mu-r", v))
+            .chain(p.eta_r.iter().map(|v| ("--eta-r", v)))
+            .chain(
+                p.points
+                    .iter()
+                    .flatten()
+                    .flat_map(|(m, e)| [("--points", m), ("--points", e)]),
+            )
+        {
+            crate::spec::check_coefficient(flag, *v)?;
+        }
+        if p.jobs == 0 || p.jobs > 256 {
+            return Err(Error::invalid("--jobs", p.jobs, "1 ..= 256"));
+        }
+        match &p.points {
+            Some(points) => {
+                Manifest::plan_points(p.base.clone(), points, p.seeds, super::utc_stamp())
+            }
+            None => Manifest::plan(
+                p.base.clone(),
+                &p.mu_r,
+                &p.eta_r,
+                p.seeds,
+                super::utc_stamp(),
+            ),
+        }
+    }
+}
+
+/// The case a manifest entry runs (its seed's, as [`run_one`] builds it).
+pub fn run_case(base: &SweepBase, r: &RunSpec) -> Result<ShearCase> {
+    Ok(shear_request(base, r, Path::new("."), 1)
+        .seed_case(r.seed)?
+        .0)
+}
+
 /// Plans the manifest of a request and stores it in `out`: a directory of the same sweep keeps
 /// its manifest (more seeds or points may be added); one of another sweep is refused.
 pub fn plan(p: &SweepRequest) -> Result<Manifest> {
-    for (flag, v) in p
-        .mu_r
-        .iter()
-        .map(|v| ("--mu-r", v))
-        .chain(p.eta_r.iter().map(|v| ("--eta-r", v)))
-        .chain(
-            p.points
-                .iter()
-                .flatten()
-                .flat_map(|(m, e)| [("--points", m), ("--points", e)]),
-        )
-    {
-        crate::spec::check_coefficient(flag, *v)?;
-    }
-    if p.jobs == 0 || p.jobs > 256 {
-        return Err(Error::invalid("--jobs", p.jobs, "1 ..= 256"));
-    }
     let out = &p.out;
-    let mut m = match &p.points {
-        Some(points) => Manifest::plan_points(p.base.clone(), points, p.seeds, super::utc_stamp())?,
-        None => Manifest::plan(
-            p.base.clone(),
-            &p.mu_r,
-            &p.eta_r,
-            p.seeds,
-            super::utc_stamp(),
-        )?,
-    };
+    let mut m = p.manifest()?;
     let mpath = out.join("manifest.json");
     if mpath.is_file() {
         let old = Manifest::load(&mpath)?;
