@@ -3,7 +3,7 @@
 //! Data flows one way:
 //! `case.toml -> Case -> {deck -> liggghts -> Series, solver -> Series} -> compare -> report`.
 //! The comparator never knows which code produced a series.
-
+#![warn(clippy::undocumented_unsafe_blocks, clippy::missing_safety_doc)]
 // Kernels index x/y/z components explicitly, as the LIGGGHTS code they mirror does.
 #![allow(clippy::needless_range_loop)]
 

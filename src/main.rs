@@ -1,5 +1,6 @@
 //! `verify`: parses the command line and maps the outcome to an exit code
 //! (0 agree, 1 disagree, 2 error, 3 inconclusive).
+#![warn(clippy::undocumented_unsafe_blocks, clippy::missing_safety_doc)]
 
 use clap::CommandFactory;
 use dem_verify::cli::study::execute;

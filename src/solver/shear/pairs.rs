@@ -495,6 +495,7 @@ struct SharedAcc<'a> {
 
 // SAFETY: the blocks write disjoint elements (a particle's sum belongs to one block).
 unsafe impl Send for SharedAcc<'_> {}
+// SAFETY: as for Send: no two threads touch one element.
 unsafe impl Sync for SharedAcc<'_> {}
 
 impl<'a> SharedAcc<'a> {
