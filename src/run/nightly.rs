@@ -61,6 +61,13 @@ pub const QUICK_MU_MARGIN: f64 = 0.1;
 pub const QUICK_STRESS_RTOL: f64 = 0.03;
 
 impl NightlySummary {
+    /// The night passes when nothing failed to run and every contact and shear row passes.
+    pub fn rows_pass(&self) -> bool {
+        self.errors.is_empty()
+            && self.contact.iter().all(|c| c.pass)
+            && self.shear.iter().all(|r| r.pass)
+    }
+
     pub fn verdict(&self) -> Verdict {
         if self.pass && self.shear.iter().any(|s| s.inconclusive) {
             Verdict::Inconclusive
@@ -124,10 +131,9 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
                 .filter_map(|s| s.error.as_ref().map(|e| format!("shear {}: {e}", s.name))),
         )
         .collect();
-    let pass = errors.is_empty() && contact.iter().all(|c| c.pass) && shear.iter().all(|s| s.pass);
-    let summary = NightlySummary {
+    let mut summary = NightlySummary {
         schema: super::SCHEMA,
-        pass,
+        pass: false,
         quick: a.quick,
         date_utc: date.clone(),
         commit,
@@ -140,6 +146,7 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
         errors,
         rejudged: None,
     };
+    summary.pass = summary.rows_pass();
     write_atomic(
         &a.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
@@ -274,12 +281,7 @@ fn shear_night(
         Engine::Both,
         a.out.join(&dir),
     );
-    args.mu_margin = if a.quick { QUICK_MU_MARGIN } else { MU_MARGIN };
-    args.stress_rtol = if a.quick {
-        QUICK_STRESS_RTOL
-    } else {
-        STRESS_RTOL
-    };
+    (args.mu_margin, args.stress_rtol) = tolerances(a.quick);
     args.liggghts = a.liggghts.clone();
     let mut row = ShearRow {
         name: format!("{preset}/{rolling} mu_r={mu_r} eta_r={eta_r}"),
@@ -332,6 +334,29 @@ fn shear_night(
     row
 }
 
+/// The steady-mu equivalence margin and the normal-stress tolerance of a night's shear rows
+/// (quick: widened to what one seed of the ci preset resolves).
+fn tolerances(quick: bool) -> (f64, f64) {
+    if quick {
+        (QUICK_MU_MARGIN, QUICK_STRESS_RTOL)
+    } else {
+        (MU_MARGIN, STRESS_RTOL)
+    }
+}
+
+/// A row's figures from its judged channels: `dmu` from `mu_steady`, the stress error the
+/// largest of the `normal_stress_*` channels (only those are stress errors: the 2026-12-02
+/// night reported the paired statistic as one).
+fn channel_figures(row: &mut ShearRow, results: &[crate::compare::ChannelResult]) {
+    for r in results {
+        if r.channel == "mu_steady" {
+            row.dmu = Some(r.max_abs_err);
+        } else if r.channel.starts_with("normal_stress") {
+            row.stress_rel_err = Some(row.stress_rel_err.unwrap_or(0.0).max(r.max_rel_err));
+        }
+    }
+}
+
 /// The case of a nightly shear point (its first seed).
 fn night_case(preset: Preset, rolling: RollingModel, mu_r: f64, eta_r: f64) -> CaseRequest {
     CaseRequest {
@@ -354,16 +379,12 @@ fn night_case(preset: Preset, rolling: RollingModel, mu_r: f64, eta_r: f64) -> C
 /// nightly row and is not judged again. Rows without both codes' per-seed figures keep
 /// their stored verdict. The night's verdict follows its rows.
 pub fn rejudge(s: &mut NightlySummary) -> Result<()> {
-    let (margin, rtol) = if s.quick {
-        (QUICK_MU_MARGIN, QUICK_STRESS_RTOL)
-    } else {
-        (MU_MARGIN, STRESS_RTOL)
-    };
+    let (margin, rtol) = tolerances(s.quick);
     for row in &mut s.shear {
         let (Some(l), Some(n)) = (&row.liggghts, &row.native) else {
             continue;
         };
-        let (l, n) = (&l.steady, &n.steady);
+        let (l, n) = (&l.steady.clone(), &n.steady.clone());
         let req = ShearRequest::new(
             night_case(row.preset, row.rolling, row.mu_r, row.eta_r),
             row.seeds,
@@ -372,29 +393,23 @@ pub fn rejudge(s: &mut NightlySummary) -> Result<()> {
         );
         let (case, _) = req.seed_case(1)?;
         let model = row.rolling.keyword();
-        let stress: Vec<_> = [("liggghts", l), ("native", n)]
-            .into_iter()
-            .map(|(code, st)| {
-                super::shear::stress_result(&row.name, model, code, st, case.normal_stress, 0, rtol)
-            })
-            .collect();
-        let (mu, paired, eq) = super::shear::mu_results(&row.name, model, l, n, 0, margin);
+        let (mut results, paired, eq) = super::shear::mu_results(&row.name, model, l, n, 0, margin);
+        results.extend([("liggghts", l), ("native", n)].map(|(code, st)| {
+            super::shear::stress_result(&row.name, model, code, st, case.normal_stress, 0, rtol)
+        }));
+        row.stress_rel_err = None;
+        channel_figures(row, &results);
         row.mu_equivalence = Some(eq);
-        let mu = &mu[0];
-        row.dmu = Some(mu.max_abs_err);
         row.mu_atol = margin;
-        row.stress_rel_err = stress.iter().map(|r| r.max_rel_err).reduce(f64::max);
         row.stress_rtol = rtol;
         row.ci_overlap = Some(within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95));
         row.paired_dmu = paired;
         row.pass = row.error.is_none()
-            && mu.pass
-            && stress.iter().all(|r| r.pass)
+            && results.iter().all(|r| r.pass)
             && row.replay.as_ref().is_none_or(|r| r.pass);
-        row.inconclusive = row.pass && mu.inconclusive;
+        row.inconclusive = row.pass && results.iter().any(|r| r.inconclusive);
     }
-    s.pass =
-        s.errors.is_empty() && s.contact.iter().all(|c| c.pass) && s.shear.iter().all(|r| r.pass);
+    s.pass = s.rows_pass();
     s.rejudged = Some(format!(
         "verify {} (commit {}), {}",
         env!("CARGO_PKG_VERSION"),
@@ -481,15 +496,7 @@ fn fill_shear_row(row: &mut ShearRow, s: &ShearSummary) -> Result<()> {
     row.inconclusive = s.verdict() == Verdict::Inconclusive;
     row.dashpot_stable = Some(s.stability.stable);
     row.worst_stability = s.stability.lines(1).into_iter().next();
-    for r in &s.results {
-        // only the stress channels are stress errors (the 2026-12-02 night reported the
-        // paired statistic as one)
-        if r.channel == "mu_steady" {
-            row.dmu = Some(r.max_abs_err);
-        } else if r.channel.starts_with("normal_stress") {
-            row.stress_rel_err = Some(row.stress_rel_err.unwrap_or(0.0).max(r.max_rel_err));
-        }
-    }
+    channel_figures(row, &s.results);
     if let (Some(l), Some(n)) = (&s.liggghts, &s.native) {
         row.ci_overlap = Some(within_cis(l.mu, l.mu_ci95, n.mu, n.mu_ci95));
     }
