@@ -8,6 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod calibration;
+pub mod chung_ooi;
 pub mod cli;
 pub mod compare;
 pub mod deck;

@@ -2,6 +2,7 @@
 //! returns an [`Outcome`]. `main` maps outcomes to exit codes: 0 agree, 1 disagree, 2 error.
 
 pub mod bench;
+pub mod chung_ooi;
 pub mod contact;
 pub mod convergence;
 pub mod nightly;
@@ -179,6 +180,13 @@ pub enum Command {
         verify bench --preset fast --steps 10000 --threads 1,2 --kernels scalar,avx2,avx512\n  \
         verify bench --preset fast --particles 250000 --native-only")]
     Bench(bench::BenchArgs),
+    /// The Chung & Ooi (2011) DEM benchmark (tests 1-4, unequal radii) in both codes: each
+    /// code against the benchmark's analytic values, and the codes against each other.
+    #[command(after_help = "Examples:\n  \
+        verify chung-ooi                          # every case, live LIGGGHTS, about 20 s\n  \
+        verify chung-ooi --case chung_ooi_4       # the oblique impacts only\n\n\
+        Exit status: 0 every figure within its tolerance and the codes agree, 1 otherwise, 2 error.")]
+    ChungOoi(chung_ooi::ChungOoiArgs),
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
     Decks {
         #[arg(long, default_value = "liggghts_inputs")]
@@ -207,6 +215,7 @@ pub fn run(cli: Cli) -> Result<Verdict> {
         Command::Contact(a) => contact::contact(a),
         Command::Shear(a) => shear::shear(a),
         Command::Bench(a) => bench::bench(a),
+        Command::ChungOoi(a) => chung_ooi::chung_ooi(a),
         Command::Replay(a) => replay::replay(a),
         Command::Nightly(a) => nightly::nightly(a),
         Command::Sweep(a) => sweep::sweep(a),

@@ -188,7 +188,7 @@ pub fn shear_deck_with(case: &ShearCase, packing: &Packing, extras: &DeckExtras)
         )
         .unwrap();
     }
-    super::material_fixes(w, m, rolling);
+    super::material_fixes(w, m, rolling, None);
     let (models, settings) = super::model_args(&case.models);
     writeln!(w, "pair_style gran {models}{settings}").unwrap();
     writeln!(w, "pair_coeff * *").unwrap();

@@ -7,6 +7,7 @@
 //! native run} -> series -> comparison (one agreement rule, [`crate::compare`]) -> outcome.
 
 pub mod bench;
+pub mod chung_ooi;
 pub mod contact;
 pub mod convergence;
 pub mod convergence_outcome;

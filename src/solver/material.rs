@@ -34,9 +34,21 @@ impl PairParams {
     /// Builds the parameters of a material with itself. `pow(x, 2.)` in LIGGGHTS is computed
     /// here as `x * x`; both are the correctly rounded square.
     pub fn new(m: &Material, models: &Models, dt: f64) -> Self {
-        let (e, nu) = (m.youngs_modulus, m.poisson_ratio);
-        let y_eff = 1.0 / ((1.0 - nu * nu) / e + (1.0 - nu * nu) / e);
-        let g_eff = 1.0 / (2.0 * (2.0 - nu) * (1.0 + nu) / e + 2.0 * (2.0 - nu) * (1.0 + nu) / e);
+        Self::between(m, None, models, dt)
+    }
+
+    /// Builds the parameters of a particle of material `m` against a body whose elastic
+    /// constants are `other` (a wall's own `(E, nu)`; `None`: the same material). The pair
+    /// coefficients (restitution, friction, rolling) are `m`'s for every type pair, as the
+    /// decks write them. The two compliances are summed in type order (i = the particle's
+    /// type 1, j = the wall's type 2), as `createYeff` and `createGeff` loop; the sum of two
+    /// doubles is commutative, so the order changes no bit.
+    pub fn between(m: &Material, other: Option<(f64, f64)>, models: &Models, dt: f64) -> Self {
+        let (ei, nui) = (m.youngs_modulus, m.poisson_ratio);
+        let (ej, nuj) = other.unwrap_or((ei, nui));
+        let y_eff = 1.0 / ((1.0 - nui * nui) / ei + (1.0 - nuj * nuj) / ej);
+        let g_eff =
+            1.0 / (2.0 * (2.0 - nui) * (1.0 + nui) / ei + 2.0 * (2.0 - nuj) * (1.0 + nuj) / ej);
         let log_e = m.restitution.ln();
         let pi = std::f64::consts::PI;
         let beta_eff = log_e / (log_e * log_e + pi * pi).sqrt();

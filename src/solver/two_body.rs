@@ -53,6 +53,8 @@ struct Body {
 
 struct Sim {
     params: PairParams,
+    /// The sphere against the wall (the wall's own elastic constants, or `params`).
+    wall_params: PairParams,
     nve: NveSphere,
     bodies: Vec<Body>,
     wall: Option<[Triangle; 2]>,
@@ -125,6 +127,15 @@ impl Sim {
         let nve = NveSphere::new(case.dt);
         Sim {
             params: PairParams::new(&case.material, &case.models, nve.dtv),
+            wall_params: PairParams::between(
+                &case.material,
+                case.wall
+                    .as_ref()
+                    .and_then(|w| w.material)
+                    .map(|wm| (wm.youngs_modulus, wm.poisson_ratio)),
+                &case.models,
+                nve.dtv,
+            ),
             nve,
             bodies,
             wall: case.wall.as_ref().map(|w| square_wall(w.z, w.half_size)),
@@ -308,7 +319,7 @@ impl Sim {
                         ContactData::wall(radi, b.mass, delta, deltan, b.s.v, [0.0; 3], b.s.omega);
                     let hist = self.wall_hist[t].get_or_insert_with(ContactHistory::default);
                     let (fi, _, _) =
-                        surfaces_intersect(&mut cd, &self.params, hist, update_history);
+                        surfaces_intersect(&mut cd, &self.wall_params, hist, update_history);
                     add_force(&mut self.bodies[0].s, &fi);
                 }
                 TriContact::EdgeOrCorner { d } => {

@@ -190,21 +190,7 @@ impl Material {
             ("material.rolling_friction", "material.rolling_damping")
         };
         let (rf, rd) = (rf.to_string(), rd.to_string());
-        positive("material.youngs_modulus", m.youngs_modulus)?;
-        range_ge(
-            "material.youngs_modulus",
-            m.youngs_modulus,
-            5e6,
-            "LIGGGHTS requires >= 5e6 Pa in SI",
-        )?;
-        finite("material.poisson_ratio", m.poisson_ratio)?;
-        if !(0.0..0.5).contains(&m.poisson_ratio) {
-            return Err(Error::invalid(
-                "material.poisson_ratio",
-                m.poisson_ratio,
-                "0 <= nu < 0.5",
-            ));
-        }
+        check_elastic("material", m.youngs_modulus, m.poisson_ratio)?;
         positive("material.density", m.density)?;
         finite("material.restitution", m.restitution)?;
         if !(m.restitution > 0.05 && m.restitution <= 1.0) {
@@ -311,6 +297,41 @@ pub struct WallSpec {
     pub z: f64,
     /// Half the side of the square [m].
     pub half_size: f64,
+    /// The wall's own elastic constants (a second atom type in LIGGGHTS, the mesh's `type 2`);
+    /// absent: the wall is made of `material` like the particles. Restitution and friction
+    /// stay those of `material` for every type pair.
+    #[serde(default)]
+    pub material: Option<WallMaterial>,
+}
+
+/// Elastic constants of a wall with its own material, e.g. a near-rigid plane (Chung & Ooi's
+/// benchmark tests 2-4 use a wall 1000 times stiffer than the sphere).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WallMaterial {
+    /// Young's modulus of the wall [Pa].
+    pub youngs_modulus: f64,
+    /// Poisson's ratio of the wall [-].
+    pub poisson_ratio: f64,
+}
+
+/// Checks Young's modulus and Poisson's ratio as LIGGGHTS requires them (E >= 5e6 Pa in SI,
+/// 0 <= nu < 0.5): the one rule for the particles' and a wall's elastic constants.
+pub fn check_elastic(prefix: &str, youngs_modulus: f64, poisson_ratio: f64) -> Result<()> {
+    let e_field = format!("{prefix}.youngs_modulus");
+    let nu_field = format!("{prefix}.poisson_ratio");
+    positive(&e_field, youngs_modulus)?;
+    range_ge(
+        &e_field,
+        youngs_modulus,
+        5e6,
+        "LIGGGHTS requires >= 5e6 Pa in SI",
+    )?;
+    finite(&nu_field, poisson_ratio)?;
+    if !(0.0..0.5).contains(&poisson_ratio) {
+        return Err(Error::invalid(nu_field, poisson_ratio, "0 <= nu < 0.5"));
+    }
+    Ok(())
 }
 
 /// A case file as written by a user (before validation).
@@ -503,6 +524,19 @@ impl CaseFile {
         if let Some(w) = &self.wall {
             bounded3("wall.z", [w.z, 0.0, 0.0], MAX_LENGTH_M, "m")?;
             positive("wall.half_size", w.half_size)?;
+            if let Some(wm) = &w.material {
+                check_elastic("wall.material", wm.youngs_modulus, wm.poisson_ratio)?;
+                // E <= 1e6 x the particles' keeps Yeff's sum of compliances from losing the
+                // particle's term entirely to round-off (a near-rigid wall is 1e3 stiffer)
+                let max = 1e6 * m.youngs_modulus;
+                if wm.youngs_modulus > max {
+                    return Err(Error::invalid(
+                        "wall.material.youngs_modulus",
+                        wm.youngs_modulus,
+                        format!("<= 1e6 x material.youngs_modulus ({max:e} Pa)"),
+                    ));
+                }
+            }
             within("wall.half_size", w.half_size, MAX_LENGTH_M, "m")?;
             let p = &self.particles[0];
             let overlap = p.radius - (p.position[2] - w.z);
@@ -848,5 +882,27 @@ mod tests {
             e.contains("eta_r acts only in epsd, epsd3 and epsd_implicit"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_wall_material_is_checked_like_the_particles() {
+        let base = builtin_case("wall_rolling_plastic").unwrap();
+        for (e, nu, field) in [
+            (1e6, 0.3, "wall.material.youngs_modulus"),
+            (7e10, 0.5, "wall.material.poisson_ratio"),
+            (f64::NAN, 0.3, "wall.material.youngs_modulus"),
+            (1e18, 0.3, "wall.material.youngs_modulus"),
+        ] {
+            let mut f = base.clone();
+            f.wall.as_mut().unwrap().material = Some(WallMaterial {
+                youngs_modulus: e,
+                poisson_ratio: nu,
+            });
+            let err = f.validate().unwrap_err().to_string();
+            assert!(err.contains(field), "{e} {nu}: {err}");
+        }
+        let text =
+            "[wall]\nz = 0.0\nhalf_size = 1.0\nmaterial = { youngs_modulus = 1e11, poisson = 0.3 }";
+        assert!(toml::from_str::<super::CaseFile>(text).is_err());
     }
 }
