@@ -6,7 +6,7 @@ mod common;
 use common::{text, verify};
 use dem_verify::compare::steady;
 use dem_verify::packing::loose_packing;
-use dem_verify::report::progress::Progress;
+use dem_verify::run::progress::Progress;
 use dem_verify::run::shear::{mu_results, ShearSummary};
 use dem_verify::shear::{run_native, shear_series, Checkpointing};
 use dem_verify::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};

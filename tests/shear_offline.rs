@@ -14,7 +14,7 @@ mod common;
 use dem_verify::compare::{lockstep, Horizon, LOCKSTEP_RTOL};
 use dem_verify::fsutil::{sha256_hex, write_atomic};
 use dem_verify::packing::{chaos_probe, loose_packing, Packing};
-use dem_verify::report::progress::Progress;
+use dem_verify::run::progress::Progress;
 use dem_verify::run::shear::{lockstep_case, shear_lockstep, LOCKSTEP_CHANNELS};
 use dem_verify::series::Series;
 use dem_verify::shear::{run_native, shear_series, Checkpointing};
@@ -125,5 +125,59 @@ fn native_shear_follows_the_stored_liggghts_run() {
         control.last_agree_step * 5 < codes.last_agree_step,
         "a 10 % wrong friction agrees for {} steps: the check has no power",
         control.last_agree_step
+    );
+}
+
+/// The calibration's rolling-stiffness error is a pure one: epsd3 with the factor 2.25 is epsd
+/// bit for bit over the lockstep run (so `--rolling epsd3 --rolling-stiffness 2.475` against
+/// epsd differs in k_r by exactly 10 % and in nothing else), and 2.475 leaves lockstep.
+#[test]
+fn epsd3_at_the_epsd_factor_is_epsd_bit_for_bit() {
+    let build = |rolling, k: Option<f64>| {
+        ShearCase::build(&CaseRequest {
+            preset: Preset::Ci,
+            rolling,
+            mu_r: 0.5,
+            eta_r: 0.5,
+            seed: 1,
+            protocol: Protocol::default(),
+            overrides: Overrides {
+                rolling_stiffness: k,
+                ..Overrides::default()
+            },
+            allow_inertial: false,
+        })
+        .unwrap()
+        .0
+    };
+    let epsd = build(RollingModel::Epsd, None);
+    let compacted = compact(&epsd, &loose_packing(&epsd), epsd.compression_steps).unwrap();
+    let run = |c: &ShearCase| native(&lockstep_case(c, STEPS), &compacted);
+    let base = run(&epsd);
+    let same = run(&build(RollingModel::Epsd3, Some(2.25)));
+    assert_eq!(base.rows.len(), same.rows.len());
+    assert!(base.rows == same.rows, "epsd3 at 2.25 differs from epsd");
+    let stiffer = run(&build(RollingModel::Epsd3, Some(2.475)));
+    assert!(
+        horizon(&base, &stiffer).last_agree_step < STEPS,
+        "k_r x 1.1 changes nothing"
+    );
+    let e = CaseRequest {
+        preset: Preset::Ci,
+        rolling: RollingModel::Epsd,
+        mu_r: 0.5,
+        eta_r: 0.5,
+        seed: 1,
+        protocol: Protocol::default(),
+        overrides: Overrides {
+            rolling_stiffness: Some(2.475),
+            ..Overrides::default()
+        },
+        allow_inertial: false,
+    };
+    let err = ShearCase::build(&e).unwrap_err().to_string();
+    assert!(
+        err.contains("--rolling-stiffness") && err.contains("epsd3"),
+        "{err}"
     );
 }

@@ -79,6 +79,10 @@ pub struct ShearArgs {
     /// Sliding friction coefficient mu_p (the presets use the paper's 0.5); in (0, 10].
     #[arg(long, help_heading = "Changes to the preset")]
     pub friction: Option<f64>,
+    /// epsd3's rolling stiffness factor (k_r = factor kn mu_r^2 R*^2; epsd's is 2.25), with
+    /// `--rolling epsd3` only; in [1, 100].
+    #[arg(long, help_heading = "Changes to the preset")]
+    pub rolling_stiffness: Option<f64>,
     /// Equivalence margin of steady mu: the codes agree when the 90 % CI of the seed-paired
     /// difference native - LIGGGHTS lies within +-margin, DISAGREE when it lies wholly beyond,
     /// and the verdict is inconclusive (exit 3) otherwise (docs/verdicts.md).
@@ -143,6 +147,7 @@ impl ShearArgs {
                 snapshot_every: self.snapshot_every,
                 restitution: self.restitution,
                 friction: self.friction,
+                rolling_stiffness: self.rolling_stiffness,
                 flat_plates: self.flat_plates,
                 tooth_height: self.tooth_height,
                 tooth_wavelength: self.tooth_wavelength,

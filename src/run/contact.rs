@@ -7,10 +7,10 @@ use crate::deck::{contact_deck, run_name, Deck, ATOM_DUMP, CONTACT_DUMP};
 use crate::error::{Error, Result};
 use crate::fsutil::{sha256_hex, write_atomic};
 use crate::liggghts::{read_contact_frames, Liggghts};
-use crate::report::{CaseError, ContactSummary};
 use crate::series::{contact_series, Series};
 use crate::solver::two_body;
 use crate::spec::{builtin_case, builtin_names, Case, CaseFile, RollingModel};
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 
 /// Which rolling models of a case to run.
@@ -328,4 +328,82 @@ pub fn read_reference_version(root: &Path) -> String {
         .and_then(|t| serde_json::from_str::<Provenance>(&t).ok())
         .map(|p| format!("{} (stored {})", p.liggghts_version, p.date_utc))
         .unwrap_or_else(|| "stored reference (no provenance found)".into())
+}
+
+/// `summary.json` of `verify contact`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactSummary {
+    pub pass: bool,
+    /// `live` (LIGGGHTS run now) or `reference` (stored LIGGGHTS outputs).
+    pub against: String,
+    pub liggghts_version: String,
+    pub rtol: f64,
+    pub results: Vec<ChannelResult>,
+    /// Largest relative error per case and model.
+    pub worst: Vec<Worst>,
+    /// Runs that could not be compared (the others still ran and are in `results`).
+    pub errors: Vec<CaseError>,
+}
+
+/// A run of a multi-case study that failed, with the error's text.
+#[derive(Clone, Debug, Serialize)]
+pub struct CaseError {
+    pub case: String,
+    pub model: String,
+    pub error: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Worst {
+    pub case: String,
+    pub model: String,
+    pub channel: String,
+    pub max_rel_err: f64,
+    pub pass: bool,
+}
+
+impl ContactSummary {
+    pub fn new(
+        against: &str,
+        liggghts_version: String,
+        rtol: f64,
+        results: Vec<ChannelResult>,
+        errors: Vec<CaseError>,
+    ) -> Self {
+        let mut worst: Vec<Worst> = Vec::new();
+        for r in &results {
+            match worst
+                .iter_mut()
+                .find(|w| w.case == r.case && w.model == r.model)
+            {
+                Some(w) => {
+                    if r.max_rel_err > w.max_rel_err || r.max_rel_err.is_nan() {
+                        w.max_rel_err = r.max_rel_err;
+                        w.channel = r.channel.clone();
+                    }
+                    w.pass &= r.pass;
+                }
+                None => worst.push(Worst {
+                    case: r.case.clone(),
+                    model: r.model.clone(),
+                    channel: r.channel.clone(),
+                    max_rel_err: r.max_rel_err,
+                    pass: r.pass,
+                }),
+            }
+        }
+        ContactSummary {
+            pass: results.iter().all(|r| r.pass) && !results.is_empty() && errors.is_empty(),
+            against: against.into(),
+            liggghts_version,
+            rtol,
+            results,
+            worst,
+            errors,
+        }
+    }
+
+    pub fn write(&self, path: &Path) -> Result<()> {
+        write_atomic(path, serde_json::to_string_pretty(self)?.as_bytes())
+    }
 }

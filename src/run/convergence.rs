@@ -12,7 +12,7 @@ use crate::compare::{
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
-use crate::report::progress::Progress;
+use crate::run::progress::Progress;
 use crate::series::Series;
 use crate::shear::{run_liggghts, run_native, write_series, Checkpointing, CHECKPOINT_EVERY};
 use crate::solver::shear::compact;

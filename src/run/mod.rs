@@ -14,6 +14,7 @@ pub mod convergence_outcome;
 pub mod limits;
 pub mod nightly;
 pub mod nightly_outcome;
+pub mod progress;
 pub mod replay;
 pub mod shear;
 pub mod sweep;

@@ -10,7 +10,7 @@ use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
 use crate::profile::VelocityProfile;
-use crate::report::progress::Progress;
+use crate::run::progress::Progress;
 use crate::series::Series;
 use crate::shear::{
     run_liggghts, run_native, write_packing, Checkpointing, CodeRun, Row, CHECKPOINT_EVERY,

@@ -94,6 +94,12 @@ pub struct Overrides {
     /// calibration's known error (docs/verdicts.md). Absent in requests before 2026-12-04.
     #[serde(default)]
     pub friction: Option<f64>,
+    /// epsd3's rolling stiffness factor (`rollingStiffness`, k_r = factor kn mu_r^2 R*^2; epsd
+    /// fixes it at 2.25): the calibration's known rolling-stiffness error (docs/verdicts.md).
+    /// Left out of the serialised request when absent, so that the input hashes of stored
+    /// runs stay what they were.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rolling_stiffness: Option<f64>,
     /// Flat plates instead of teeth.
     pub flat_plates: bool,
     pub tooth_height: Option<f64>,
@@ -388,6 +394,28 @@ impl ShearCase {
             }
             c.material.friction = mu;
             c.name = format!("{}_mup{mu}", c.name).replace('.', "p");
+        }
+        if let Some(k) = o.rolling_stiffness {
+            if r.rolling != RollingModel::Epsd3 {
+                return Err(Error::invalid(
+                    "--rolling-stiffness",
+                    k,
+                    format!(
+                        "only with --rolling epsd3 (the one model that reads it; `{}` fixes \
+                         its own)",
+                        r.rolling
+                    ),
+                ));
+            }
+            if !(k.is_finite() && (1.0..=100.0).contains(&k)) {
+                return Err(Error::invalid(
+                    "--rolling-stiffness",
+                    k,
+                    "a number in [1, 100]",
+                ));
+            }
+            c.material.rolling_stiffness = k;
+            c.name = format!("{}_kr{k}", c.name).replace('.', "p");
         }
         if o.flat_plates {
             // a tooth size with flat plates would be silently dropped
