@@ -25,7 +25,10 @@ if [ -z "${EQUAL_FROM:-}" ]; then
 else
   read -r -a equal <<< "$EQUAL_FROM"
 fi
-"$verify" shear "${point[@]}" --native-only --out "$work/base" > "$work/base.log" 2>&1
+# BASE_FROM=DIR: the base runs from a stored native-only invocation of the same point and
+# seeds (e.g. an earlier calibration's base/) instead of running them again
+base=${BASE_FROM:-$work/base}
+[ -n "${BASE_FROM:-}" ] || "$verify" shear "${point[@]}" --native-only --out "$base" > "$work/base.log" 2>&1
 for e in $errors; do
   case $e in
     ulp) flag=(--friction 0.5000000000000001) ;;
@@ -38,9 +41,9 @@ for e in $errors; do
   "$verify" shear "${point[@]}" --native-only "${flag[@]}" --out "$work/$e" > "$work/$e.log" 2>&1
 done
 commit=${COMMIT:-$(git -C "$(dirname "$0")/.." rev-parse --short HEAD 2>/dev/null || echo unknown)}
-python3 - "$preset" "$work" "$commit" "$seeds" "$mu_r" "$eta_r" "$errors" "${equal[@]}" <<'PY'
+python3 - "$preset" "$work" "$commit" "$seeds" "$mu_r" "$eta_r" "$errors" "$base" "${equal[@]}" <<'PY'
 import json, sys, datetime
-preset, work, commit, seeds, mu_r, eta_r, errors, *equal = sys.argv[1:]
+preset, work, commit, seeds, mu_r, eta_r, errors, base_dir, *equal = sys.argv[1:]
 def steady(d, code):
     s = json.load(open(f"{d}/summary.json"))
     return [x["seed"] for x in s["seeds"]], s[code]["per_seed_mu"]
@@ -50,7 +53,7 @@ for d in equal:
     _, nat = steady(d, "native")
     sets.append(dict(label=f"liggghts vs native ({d.rstrip('/').split('/')[-1]})", equal=True,
                      seeds=seeds_e, a=lig, b=nat))
-seeds_b, base = steady(f"{work}/base", "native")
+seeds_b, base = steady(base_dir, "native")
 names = {"ulp": "native vs native, mu_p + 1 ulp", "mup1.1": "mu_p x1.1", "mup0.9": "mu_p x0.9", "e0.9": "restitution 0.9",
          "kr1.1": "rolling stiffness x1.1"}
 for e in errors.split():

@@ -585,22 +585,7 @@ impl CaseFile {
                 ));
             }
         }
-        let t_r = rayleigh_time(m, rmin);
-        if self.dt > t_r {
-            return Err(Error::invalid(
-                "dt",
-                self.dt,
-                format!("<= the Rayleigh time {t_r:.4e} s of the smallest particle"),
-            ));
-        }
-        if self.dt > 0.2 * t_r {
-            warnings.push(format!(
-                "dt = {:e} s is {:.0} % of the Rayleigh time {:.4e} s (above 20 %)",
-                self.dt,
-                100.0 * self.dt / t_r,
-                t_r
-            ));
-        }
+        warnings.extend(check_dt(self.dt, m, rmin)?);
         for r in self.applicable_rolling() {
             check_damping_model(
                 &format!("material.rolling_damping (with rolling_models `{r}`)"),
@@ -613,6 +598,27 @@ impl CaseFile {
             warnings,
         })
     }
+}
+
+/// The time-step rule of every case (contact and shear): dt is refused above the Rayleigh
+/// time of the smallest particle and warned about above 20 % of it. Returns the warning.
+pub fn check_dt(dt: f64, m: &Material, rmin: f64) -> Result<Option<String>> {
+    positive("dt", dt)?;
+    let t_r = rayleigh_time(m, rmin);
+    if dt > t_r {
+        return Err(Error::invalid(
+            "dt",
+            dt,
+            format!("<= the Rayleigh time {t_r:.4e} s of the smallest particle"),
+        ));
+    }
+    Ok((dt > 0.2 * t_r).then(|| {
+        format!(
+            "dt = {dt:e} s is {:.0} % of the Rayleigh time {t_r:.4e} s of the smallest \
+             particle (above 20 %)",
+            100.0 * dt / t_r
+        )
+    }))
 }
 
 /// Half-width of the cubic simulation box both codes use for a contact case [m]: large enough

@@ -686,23 +686,7 @@ impl ShearCase {
             m.rolling_damping,
             self.models.rolling,
         )?;
-        positive("dt", self.dt)?;
-        let t_r = super::rayleigh_time(m, rmin);
-        if self.dt > t_r {
-            return Err(Error::invalid(
-                "dt",
-                self.dt,
-                format!("<= the Rayleigh time {t_r:.4e} s"),
-            ));
-        }
-        if self.dt > 0.2 * t_r {
-            warnings.push(format!(
-                "dt = {:e} s is {:.0} % of the Rayleigh time {:.3e} s (above 20 %)",
-                self.dt,
-                100.0 * self.dt / t_r,
-                t_r
-            ));
-        }
+        warnings.extend(super::check_dt(self.dt, m, rmin)?);
         positive("normal_stress", self.normal_stress)?;
         positive("servo.vel_max", self.servo.vel_max)?;
         positive("skin", self.skin)?;
