@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Mutation testing of the contact kernels, the integrator and the verdict rules (issue #35,
-# docs/mutants.md) with cargo-mutants, in a folder outside the clone. Resumable: a rerun skips
-# the mutants already caught or found unviable (--iterate) and goes on with the others.
+# docs/mutants.md) with cargo-mutants, in a clone of this repository's HEAD outside it
+# (DIR/tree, mutated in place there, so its build cache survives between sessions). Resumable:
+# a rerun skips the mutants already tested (--iterate) and goes on with the others, in a
+# shuffled order, so that the mutants tested so far are a random sample of all.
 #   bash tools/mutants.sh [DIR] [-- extra cargo-mutants args]     DIR default /work/mutants
 # The tests run per mutant are those that judge these files quickly: the library's unit tests
 # of the solver, compare and calibration modules, the stored two-body references
@@ -19,14 +21,16 @@ files=(
   -f 'src/solver/contact/mod.rs' -f 'src/solver/integrate.rs'
   -f 'src/compare.rs' -f 'src/calibration.rs' -f 'src/chung_ooi.rs'
 )
+[ -d "$dir/tree/.git" ] || git clone -q "$repo" "$dir/tree"
+git -C "$dir/tree" fetch -q "$repo" HEAD && git -C "$dir/tree" checkout -q --detach FETCH_HEAD
 iterate=()
 [ -f "$dir/mutants.out/outcomes.json" ] && iterate=(--iterate)
-cd "$repo"
-nice -n 10 cargo mutants "${files[@]}" "${iterate[@]}" --profile mutants -j 1 \
-  --output "$dir" --timeout-multiplier 3 \
-  --cargo-test-arg=--lib --cargo-test-arg=--test=contact_reference \
-  --cargo-test-arg=--test=analytic --cargo-test-arg=--test=chung_ooi \
-  --cargo-test-arg=--test=calibration \
+cd "$dir/tree"
+# only the test targets named below are built and run per mutant (-C applies to the build too)
+nice -n 10 cargo mutants "${files[@]}" "${iterate[@]}" --in-place --profile mutants -j 1 \
+  --shuffle --output "$dir" --timeout-multiplier 3 \
+  -C --lib -C --test=contact_reference -C --test=analytic -C --test=chung_ooi \
+  -C --test=calibration \
   "$@" -- -- solver::contact:: solver::integrate solver::material compare:: calibration \
   chung_ooi::tests a_ten_per_cent native_matches committed_decks a_wrong_friction rolling_ \
   tangential_ normal_ wall_ verdict equivalence the_docs_table equal_codes
