@@ -27,7 +27,7 @@ iterate=()
 [ -f "$dir/mutants.out/outcomes.json" ] && iterate=(--iterate)
 cd "$dir/tree"
 # only the test targets named below are built and run per mutant (-C applies to the build too)
-nice -n 10 cargo mutants "${files[@]}" "${iterate[@]}" --in-place --profile mutants -j 1 \
+nice -n 10 cargo mutants "${files[@]}" "${iterate[@]}" --in-place --profile mutants \
   --shuffle --output "$dir" --timeout-multiplier 3 \
   -C --lib -C --test=contact_reference -C --test=analytic -C --test=chung_ooi \
   -C --test=calibration \
