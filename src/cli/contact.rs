@@ -4,8 +4,10 @@
 
 use crate::cli::LiggghtsArgs;
 use crate::compare::CONTACT_RTOL;
+use crate::deck::run_name;
 use crate::error::{Error, Result};
 use crate::liggghts::Liggghts;
+use crate::report::contact::plots_of_run;
 use crate::report::{channel_table, worst_table};
 use crate::run::contact::{
     check_reference_target, contact_runs, read_reference_version, run_all, ContactRequest,
@@ -109,6 +111,7 @@ pub fn contact(a: ContactArgs) -> Result<Verdict> {
         }
     }
     let against = if a.reference { "reference" } else { "live" };
+    let figure_errors = std::cell::RefCell::new(Vec::new());
     let summary = run_all(
         &runs,
         &req,
@@ -128,6 +131,14 @@ pub fn contact(a: ContactArgs) -> Result<Verdict> {
                     return;
                 }
             };
+            let name = run_name(case);
+            if let Err(e) = plots_of_run(
+                &out.join(&name),
+                &name,
+                case.models.rolling != RollingModel::Off,
+            ) {
+                figure_errors.borrow_mut().push(format!("{name}: {e}"));
+            }
             let pass = results.iter().all(|r| r.pass);
             let worst = results.iter().map(|r| r.max_rel_err).fold(0.0, f64::max);
             println!(
@@ -144,5 +155,13 @@ pub fn contact(a: ContactArgs) -> Result<Verdict> {
     )?;
     println!("\n{}", worst_table(&summary));
     println!("summary: {}", out.join("summary.json").display());
+    let figure_errors = figure_errors.into_inner();
+    if !figure_errors.is_empty() {
+        return Err(Error::Cases(format!(
+            "the figures of {} run(s) could not be drawn (the comparisons are in the summary):\n  {}",
+            figure_errors.len(),
+            figure_errors.join("\n  ")
+        )));
+    }
     Ok(Verdict::from_pass(summary.pass))
 }

@@ -50,5 +50,13 @@ pub fn convergence(a: ConvergenceArgs) -> Result<Verdict> {
             "--engine native|liggghts|both for verify convergence",
         ));
     }
-    Ok(run(&a.request())?.verdict())
+    let req = a.request();
+    let summary = run(&req)?;
+    let out = &req.shear.out;
+    crate::report::convergence::plots(out, &summary.points)?;
+    println!(
+        "  plots: {} and erot_dt.svg",
+        out.join("mu_dt.svg").display()
+    );
+    Ok(summary.verdict())
 }

@@ -72,6 +72,15 @@ pub fn relative_error(a: &Series, b: &Series) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The figures of one finished contact run, drawn from the series its run wrote
+/// (`dir/liggghts.csv`, `dir/native.csv`): the report reads the run's outcome from disk, the
+/// run layer draws nothing.
+pub fn plots_of_run(dir: &Path, title: &str, rolling_on: bool) -> Result<()> {
+    let lig = Series::read_csv(&dir.join("liggghts.csv"))?;
+    let nat = Series::read_csv(&dir.join("native.csv"))?;
+    contact_plots(dir, title, &lig, &nat, rolling_on)
+}
+
 /// Writes `history.svg` (main channel, LIGGGHTS solid, native dashed on top) and `error.svg`
 /// (largest relative error over all channels against time) into `dir`.
 pub fn contact_plots(

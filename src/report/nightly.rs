@@ -315,6 +315,10 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             }
         });
         let dir = out.join(&r.dir);
+        if r.error.is_none() {
+            let title = dir.file_name().map(|n| n.to_string_lossy().into_owned());
+            super::contact::plots_of_run(&dir, &title.unwrap_or_default(), r.model != "off")?;
+        }
         let mut figs = Vec::new();
         for (f, cap) in [
             ("history.svg", "both codes overlaid"),

@@ -167,13 +167,6 @@ pub fn contact_one(
     };
     lig_series.write_csv(&dir.join("liggghts.csv"))?;
     native.write_csv(&dir.join("native.csv"))?;
-    crate::report::contact::contact_plots(
-        &dir,
-        &name,
-        &lig_series,
-        &native,
-        case.models.rolling != RollingModel::Off,
-    )?;
     compare(
         &case.name,
         case.models.rolling.keyword(),

@@ -157,8 +157,9 @@ impl ConvergenceRequest {
     }
 }
 
-/// Runs the study (reusing every stored current run), prints its table, writes plots and
-/// `summary.json`.
+/// Runs the study (reusing every stored current run), prints its table and writes
+/// `summary.json`; the figures are the report's ([`crate::report::convergence::plots`], drawn
+/// by the command from the summary's points).
 pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     a.validate()?;
     let sh = &a.shear;
@@ -394,7 +395,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             says(e)
         );
     }
-    crate::report::convergence::plots(&out, &points)?;
     let summary = ConvergenceSummary {
         schema: super::SCHEMA,
         preset: sh.case.preset,
@@ -418,10 +418,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     super::note_summary(&out.join("summary.json"));
-    println!(
-        "  plots: {} and erot_dt.svg; summary: {}",
-        out.join("mu_dt.svg").display(),
-        out.join("summary.json").display()
-    );
+    println!("  summary: {}", out.join("summary.json").display());
     Ok(summary)
 }
