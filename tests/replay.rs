@@ -37,7 +37,7 @@ fn replay(rolling: RollingModel, mu_r: f64, eta_r: f64, e: f64) -> ReplayOutcome
 }
 
 fn check(o: &ReplayOutcome) {
-    let table = dem_verify::run::replay::table(o);
+    let table = dem_verify::report::replay::table(o);
     assert_eq!(o.windows.len(), 6, "{table}");
     let phases: Vec<&str> = o.windows.iter().map(|w| w.phase.as_str()).collect();
     assert_eq!(

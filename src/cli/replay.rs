@@ -3,7 +3,8 @@
 
 use crate::cli::LiggghtsArgs;
 use crate::error::{Error, Result};
-use crate::run::replay::{default_states, run, table, ReplayRequest, REPLAY_TIMEOUT_S};
+use crate::report::replay::{plot, table};
+use crate::run::replay::{default_states, run, ReplayRequest, REPLAY_TIMEOUT_S};
 use crate::run::{out_or_default, Verdict};
 use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::RollingModel;
@@ -132,6 +133,7 @@ pub fn replay(a: ReplayArgs) -> Result<Verdict> {
     let lig = a.liggghts.request(REPLAY_TIMEOUT_S).locate()?;
     std::fs::create_dir_all(&req.out).map_err(|e| Error::io(&req.out, e))?;
     let o = run(&req, &lig, |m| eprintln!("{m}"))?;
+    plot(&req.out, &o)?;
     print!("{}", table(&o));
     println!(
         "summary: {}  plot: {}",

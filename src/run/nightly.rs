@@ -473,10 +473,12 @@ fn replay_night(
                 rtol: STEP1_RTOL,
                 out,
             };
-            super::replay::run(&req, lig, |m| println!("  {m}"))?
+            let o = super::replay::run(&req, lig, |m| println!("  {m}"))?;
+            crate::report::replay::plot(&req.out, &o)?;
+            o
         }
     };
-    print!("{}", super::replay::table(&o));
+    print!("{}", crate::report::replay::table(&o));
     Ok(ReplayRow {
         pass: o.pass,
         windows: o.windows.len(),

@@ -12,7 +12,8 @@
 //! particle moved by one ulp.
 //!
 //! Data flow: request -> deck + LIGGGHTS run -> dumps -> native replay -> outcome (typed,
-//! serialisable) -> table / summary.json / SVG. This module never reads command-line flags.
+//! serialisable) -> summary.json (the table and SVG are the report's, [`crate::report::replay`]).
+//! This module never reads command-line flags.
 
 use crate::deck::shear::{replay_dumps, shear_deck_with, DeckExtras, THERMO_COLUMNS};
 use crate::error::{Error, Result};
@@ -27,8 +28,6 @@ mod channels;
 mod dumps;
 pub mod outcome;
 
-use crate::report::replay::plot;
-pub use crate::report::replay::table;
 pub use channels::JUDGED;
 use channels::{compare, liggghts_side, max_judged, native_side, worst, KERNEL};
 use dumps::{parse_err, read_dumped, v3};
@@ -283,7 +282,6 @@ pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Resu
     let json = serde_json::to_string_pretty(&outcome)?;
     write_atomic(&req.out.join("summary.json"), json.as_bytes())?;
     crate::run::note_summary(&req.out.join("summary.json"));
-    plot(&req.out, &outcome)?;
     Ok(outcome)
 }
 
