@@ -22,6 +22,8 @@ files=(
   -f 'src/compare.rs' -f 'src/calibration.rs' -f 'src/chung_ooi.rs'
 )
 [ -d "$dir/tree/.git" ] || git clone -q "$repo" "$dir/tree"
+# an interrupted run may leave a mutant in the tree: back to the commit first
+git -C "$dir/tree" reset -q --hard
 git -C "$dir/tree" fetch -q "$repo" HEAD && git -C "$dir/tree" checkout -q --detach FETCH_HEAD
 iterate=()
 [ -f "$dir/mutants.out/outcomes.json" ] && iterate=(--iterate)
