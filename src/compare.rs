@@ -687,12 +687,20 @@ pub fn judge(mean: f64, ci90: f64, ci95: f64, margin: f64) -> Outcome {
 }
 
 /// See [`Equivalence::seeds_needed`].
+///
+/// The CI that must clear the margin is the one of the verdict the mean heads for: inside the
+/// margin the 90 % CI (agree: t(0.95, n-1)), beyond it the 95 % CI (DISAGREE: t(0.975, n-1)).
 pub fn seeds_needed(mean: f64, sd: f64, margin: f64) -> Option<usize> {
     let gap = (margin - mean.abs()).abs();
     if !(sd.is_finite() && gap > 0.0) {
         return None;
     }
-    (2..=MAX_SEEDS_NEEDED).find(|&n| t95_one_sided(n - 1) * sd / (n as f64).sqrt() < gap)
+    let t: fn(usize) -> f64 = if mean.abs() < margin {
+        t95_one_sided
+    } else {
+        t95
+    };
+    (2..=MAX_SEEDS_NEEDED).find(|&n| t(n - 1) * sd / (n as f64).sqrt() < gap)
 }
 
 /// The equivalence test of paired differences `b - a` (at least one pair; one pair needs the
@@ -791,6 +799,13 @@ mod equivalence_tests {
         // t(n-1) 0.05 / sqrt n < 0.03 first at n = 10 (1.833 * 0.05 / 3.162 = 0.0290;
         // n = 9: 1.860 * 0.05 / 3 = 0.0310)
         assert_eq!(e.seeds_needed, Some(10));
+        // where t changes fast (sd 1, gap 1.5): t(2) / sqrt 3 = 1.686 > 1.5, t(3) / 2 = 1.177
+        // < 1.5: 4 seeds toward agree; toward DISAGREE (mean beyond the margin) the 95 % t:
+        // t(3) 3.182 / 2 = 1.591 > 1.5, t(4) 2.776 / sqrt 5 = 1.242: 5 seeds
+        assert_eq!(seeds_needed(0.0, 1.0, 1.5), Some(4));
+        assert_eq!(seeds_needed(3.0, 1.0, 1.5), Some(5));
+        assert_eq!(seeds_needed(0.5, f64::NAN, 1.5), None);
+        assert_eq!(seeds_needed(1.5, 1.0, 1.5), None);
         // equal codes over many seeds agree
         let a: Vec<f64> = (0..12).map(|i| 0.5 + 0.01 * i as f64).collect();
         let b: Vec<f64> = a

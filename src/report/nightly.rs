@@ -315,7 +315,9 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             }
         });
         let dir = out.join(&r.dir);
-        if r.error.is_none() {
+        // a night's run left its CSVs: draw from them; a stored night keeps its figures only
+        let csvs = ["liggghts.csv", "native.csv"].map(|f| dir.join(f).is_file());
+        if r.error.is_none() && csvs == [true, true] {
             let title = dir.file_name().map(|n| n.to_string_lossy().into_owned());
             super::contact::plots_of_run(&dir, &title.unwrap_or_default(), r.model != "off")?;
         }
