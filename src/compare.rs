@@ -153,6 +153,15 @@ mod tests {
     }
 
     #[test]
+    fn other_output_steps_name_the_first_mismatch() {
+        let a = series(&[[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]]);
+        let mut b = a.clone();
+        b.steps[2] = 7;
+        let e = compare("c", "m", &a, &b, 1e-9).unwrap_err().to_string();
+        assert!(e.contains("3 vs 3 rows, first mismatch 2 vs 7"), "{e}");
+    }
+
+    #[test]
     fn other_columns_name_the_first_difference() {
         let a = series(&[[1.0, 0.0, 0.0]]);
         let mut b = a.clone();
