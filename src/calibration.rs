@@ -366,6 +366,32 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_printed_verdict_cites_the_rates_that_apply() {
+        // inconclusive at 3 ci seeds: the figures, the seeds that would decide, the 3-seed rates
+        let e = crate::compare::equivalence(&[0.5, 0.5, 0.5], &[0.55, 0.45, 0.5], 0.03).unwrap();
+        let lines = describe(&e, Preset::Ci);
+        assert_eq!(lines.len(), 3, "{lines:?}");
+        assert!(
+            lines[0].contains("+0.0000 +- 0.0843 (90 % CI, 3 seeds)"),
+            "{lines:?}"
+        );
+        assert!(lines[0].contains("inconclusive"), "{lines:?}");
+        assert!(
+            lines[1].contains("about 10 seeds would decide"),
+            "{lines:?}"
+        );
+        let c = CITED
+            .iter()
+            .find(|c| c.preset == Preset::Ci && c.seeds == 3)
+            .unwrap();
+        let alarm = format!("false alarm about {:.1} %", 100.0 * c.false_alarm);
+        assert!(
+            lines[2].contains("ci preset, 3 seeds") && lines[2].contains(&alarm),
+            "{lines:?}"
+        );
+    }
+
+    #[test]
     fn equal_codes_rarely_disagree_and_a_large_error_always_does() {
         // a symmetric pool of spread about 0.07 (the ci preset's): 3 seeds cannot decide
         let pool: Vec<f64> = (0..20).map(|i| 0.012 * (i as f64 - 9.5)).collect();
