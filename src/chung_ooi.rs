@@ -417,22 +417,15 @@ pub fn judge(b: &BenchmarkCase, s: &Series) -> Result<Vec<Check>> {
                 m1 * m2 / (m1 + m2),
             );
             let (v1, v2) = (p0.velocity[0], p1.velocity[0]);
-            let theory = hertz_collision(y_eff(m, None), r_eff, m_eff, v1 - v2);
+            let y = y_eff(m, None);
+            let theory = hertz_collision(y, r_eff, m_eff, v1 - v2);
             let (x1, x2) = (column(s, "x_1_x[m]")?, column(s, "x_2_x[m]")?);
             let overlap = x1
                 .iter()
                 .zip(&x2)
                 .map(|(a, b)| p0.radius + p1.radius - (b - a))
                 .fold(f64::MIN, f64::max);
-            hertz_checks(
-                &mut out,
-                &theory,
-                y_eff(m, None),
-                r_eff,
-                overlap,
-                f_max,
-                duration,
-            );
+            hertz_checks(&mut out, &theory, y, r_eff, overlap, f_max, duration);
             // elastic exchange along the line of centres
             let u1 = ((m1 - m2) * v1 + 2.0 * m2 * v2) / (m1 + m2);
             let u2 = ((m2 - m1) * v2 + 2.0 * m1 * v1) / (m1 + m2);

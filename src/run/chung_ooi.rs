@@ -45,7 +45,13 @@ pub fn run_case(b: &BenchmarkCase, lig: &Liggghts, out: &Path) -> Result<Benchma
     let deck = contact_deck(&case);
     let lig_series = super::contact::liggghts_contact_series(&case, &deck, lig, &dir)?;
     lig_series.write_csv(&dir.join("liggghts.csv"))?;
-    let channels = compare(&case.name, "off", &lig_series, &native, CONTACT_RTOL)?;
+    let channels = compare(
+        &case.name,
+        case.models.rolling.keyword(),
+        &lig_series,
+        &native,
+        CONTACT_RTOL,
+    )?;
     if channels.is_empty() {
         return Err(Error::Mismatch(format!(
             "{}: no channel compared",
