@@ -829,6 +829,23 @@ mod equivalence_tests {
         assert_eq!(e.outcome, Outcome::Disagree);
         assert_eq!(e.seeds_needed, None);
         assert!(equivalence(&a[..1], &b[..1], 0.03).is_none());
+        // the phrase the verdict prints (a cargo-mutants survivor: any text passed)
+        let e = equivalence(&[0.5, 0.5, 0.5], &[0.55, 0.45, 0.5], 0.03).unwrap();
+        assert_eq!(
+            e.figures(),
+            "+0.0000, 90 % CI [-0.0843, +0.0843] over 3 seed(s), about 10 seeds would decide"
+        );
+    }
+
+    /// Overlapping 95 % intervals agree, touching ones too, separate ones do not (a
+    /// cargo-mutants survivor: `false` everywhere passed).
+    #[test]
+    fn overlapping_cis_agree() {
+        assert!(within_cis(0.5, 0.02, 0.53, 0.02));
+        assert!(within_cis(0.53, 0.02, 0.5, 0.02));
+        assert!(within_cis(0.5, 0.25, 0.75, 0.0));
+        assert!(!within_cis(0.5, 0.01, 0.53, 0.01));
+        assert!(!within_cis(0.5, 0.0, f64::NAN, 1.0));
     }
 
     #[test]

@@ -18,6 +18,13 @@
 //!   intersecting ones, `cleanUpContacts` deletes the rest: the history ends with the contact.
 //! - During `setup` of every `run` (Verlet::setup), forces are computed with `shearupdate = 0`:
 //!   the kernels run but do not write the history.
+//!
+//! Every kernel is generic over [`lanes::Lanes`]: the same code evaluates one contact
+//! (`f64`: the two-body cases, the wall contacts, the scalar shear pass) and 4 or 8 at once
+//! (AVX2 / AVX-512 lanes, the SIMD shear passes through [`batch::pair`]). A branch of the
+//! headers that depends on a contact's values is a per-lane [`lanes::Lanes::select`] (for
+//! `f64` an `if`); a branch on the model (pair or wall, the rolling keyword, the parameters)
+//! is an `if` for all lanes alike.
 
 pub mod batch;
 pub mod lanes;
@@ -31,58 +38,93 @@ pub mod tangential;
 use super::material::PairParams;
 use super::vec3::V3;
 use crate::spec::RollingModel;
+use lanes::{Lanes, Mask};
 
-/// LIGGGHTS' `SurfacesIntersectData` for spheres: geometry and kinematics of one contact.
-/// `i` is the first partner; for walls `j` is the wall.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ContactData {
-    pub is_wall: bool,
-    pub radi: f64,
-    /// Radius of partner j (unused for walls).
-    pub radj: f64,
-    /// `radi + radj` (pair) or `radi` (wall).
-    pub radsum: f64,
-    /// Centre distance (pair) or `radi - overlap` (wall).
-    pub r: f64,
-    pub rinv: f64,
-    /// `x_i - x_j` (pair) or contact point to centre (wall).
-    pub delta: V3,
-    /// Unit normal, `delta * rinv`, pointing from j (or the wall) towards i.
-    pub en: V3,
-    /// Overlap. For walls the mesh code sets it before the surface model runs; the surface
-    /// model then overwrites it with `radsum - r` (surface_model_default.h).
-    pub deltan: f64,
-    pub meff: f64,
-    pub mi: f64,
-    pub mj: f64,
-    pub v_i: V3,
-    pub v_j: V3,
-    pub omega_i: V3,
-    pub omega_j: V3,
-    // Written by the surface model:
-    pub vn: f64,
-    pub wr: V3,
-    pub vtr: V3,
-    pub cri: f64,
-    pub crj: f64,
+/// `a . b` as vector_liggghts.h: `a0 b0 + a1 b1 + a2 b2`, left to right.
+#[inline(always)]
+pub(crate) fn dot<L: Lanes>(a: [L; 3], b: [L; 3]) -> L {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-impl ContactData {
+/// The mask with no lane set.
+#[inline(always)]
+pub(crate) fn no_lanes<L: Lanes>() -> L::M {
+    let zero = L::splat(0.0);
+    zero.ne(zero)
+}
+
+/// LIGGGHTS' `SurfacesIntersectData` for spheres: geometry and kinematics of one contact
+/// per lane. `i` is the first partner; for walls `j` is the wall (walls and pairs are never
+/// mixed in one evaluation: `is_wall` holds for every lane).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactData<L = f64> {
+    pub is_wall: bool,
+    pub radi: L,
+    /// Radius of partner j (unused for walls).
+    pub radj: L,
+    /// `radi + radj` (pair) or `radi` (wall).
+    pub radsum: L,
+    /// Centre distance (pair) or `radi - overlap` (wall).
+    pub r: L,
+    pub rinv: L,
+    /// `x_i - x_j` (pair) or contact point to centre (wall).
+    pub delta: [L; 3],
+    /// Unit normal, `delta * rinv`, pointing from j (or the wall) towards i.
+    pub en: [L; 3],
+    /// Overlap. For walls the mesh code sets it before the surface model runs; the surface
+    /// model then overwrites it with `radsum - r` (surface_model_default.h).
+    pub deltan: L,
+    pub meff: L,
+    pub mi: L,
+    pub mj: L,
+    pub v_i: [L; 3],
+    pub v_j: [L; 3],
+    pub omega_i: [L; 3],
+    pub omega_j: [L; 3],
+    // Written by the surface model:
+    pub vn: L,
+    pub wr: [L; 3],
+    pub vtr: [L; 3],
+    pub cri: L,
+    pub crj: L,
+}
+
+/// pair_gran_base.h's contact test of a listed pair: j seen at its image `x_j + shift`,
+/// `delta = x_i - x_j'`, `rsq = (d0 d0 + d1 d1) + d2 d2`; the pair touches iff
+/// `!(rsq >= radsum^2)`. Returns `delta`, `rsq` and the touching lanes.
+#[inline(always)]
+pub fn pair_geometry<L: Lanes>(
+    xi: [L; 3],
+    xj: [L; 3],
+    shift: [L; 3],
+    radi: L,
+    radj: L,
+) -> ([L; 3], L, L::M) {
+    let xj = [xj[0] + shift[0], xj[1] + shift[1], xj[2] + shift[2]];
+    let delta = [xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]];
+    let rsq = dot(delta, delta);
+    let radsum = radi + radj;
+    (delta, rsq, rsq.ge(radsum * radsum).not())
+}
+
+impl<L: Lanes> ContactData<L> {
     /// A touching particle pair as pair_gran_base.h sets it up: `delta = x_i - x_j` (j's
     /// image), `r = sqrt(rsq)`, `rinv = 1/r`, `en = delta * rinv`, `meff = mi mj / (mi + mj)`.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub fn pair(
-        delta: V3,
-        rsq: f64,
-        radi: f64,
-        radj: f64,
-        mi: f64,
-        mj: f64,
-        v: (V3, V3),
-        omega: (V3, V3),
+        delta: [L; 3],
+        rsq: L,
+        radi: L,
+        radj: L,
+        mi: L,
+        mj: L,
+        v: ([L; 3], [L; 3]),
+        omega: ([L; 3], [L; 3]),
     ) -> Self {
+        let zero = L::splat(0.0);
         let r = rsq.sqrt();
-        let rinv = 1.0 / r;
+        let rinv = L::splat(1.0) / r;
         ContactData {
             is_wall: false,
             radi,
@@ -92,6 +134,7 @@ impl ContactData {
             rinv,
             delta,
             en: [delta[0] * rinv, delta[1] * rinv, delta[2] * rinv],
+            deltan: zero,
             meff: mi * mj / (mi + mj),
             mi,
             mj,
@@ -99,10 +142,34 @@ impl ContactData {
             v_j: v.1,
             omega_i: omega.0,
             omega_j: omega.1,
-            ..Default::default()
+            vn: zero,
+            wr: [zero; 3],
+            vtr: [zero; 3],
+            cri: zero,
+            crj: zero,
         }
     }
 
+    /// The effective radius every model reads (normal_model_hertz.h and the rolling
+    /// headers each compute it; one formula here): `radi` for walls, else
+    /// `radi radj / (radi + radj)`.
+    #[inline(always)]
+    pub fn reff(&self) -> L {
+        if self.is_wall {
+            self.radi
+        } else {
+            pair_reff(self.radi, self.radj)
+        }
+    }
+}
+
+/// `reff` of a pair: `radi radj / (radi + radj)`, left to right.
+#[inline(always)]
+pub fn pair_reff<L: Lanes>(radi: L, radj: L) -> L {
+    radi * radj / (radi + radj)
+}
+
+impl ContactData<f64> {
     /// A sphere touching a wall triangle as fix_wall_gran.cpp `post_force_mesh` sets it up:
     /// `deltan = d - r_i` from the triangle test (`resolveTriSphereContactBary`), the contact
     /// `delta` negated, `r = r_i - overlap`, `rinv = 1/r`, `en = delta rinv`, `meff = m_i`,
@@ -147,22 +214,35 @@ pub fn moved_beyond_half_skin(x: V3, hold: V3, skin: f64) -> bool {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > trigger * trigger
 }
 
-/// Force and torque increments of one partner (LIGGGHTS `ForceData`).
+/// Force and torque increments of one partner (LIGGGHTS `ForceData`), per lane.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[repr(C)]
-pub struct ForceData {
-    pub delta_f: V3,
-    pub delta_torque: V3,
+pub struct ForceData<L = f64> {
+    pub delta_f: [L; 3],
+    pub delta_torque: [L; 3],
+}
+
+impl<L: Lanes> ForceData<L> {
+    /// Zero increments: each stage adds to them (`0 + x`, as LIGGGHTS adds into a zeroed
+    /// `ForceData`; kept because `0 + (-0) = +0`).
+    #[inline(always)]
+    pub fn zero() -> Self {
+        let zero = L::splat(0.0);
+        ForceData {
+            delta_f: [zero; 3],
+            delta_torque: [zero; 3],
+        }
+    }
 }
 
 /// The history slots of one contact, in LIGGGHTS' order: tangential `shearx..z` [m], then
-/// (epsd, epsd2, epsd3) `r_torquex_old..z` [N m].
+/// (epsd, epsd2, epsd3, epsd_implicit) `r_torquex_old..z` [N m].
 /// `repr(C)`: the batched pair pass reads the slots at fixed offsets.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[repr(C)]
-pub struct ContactHistory {
-    pub shear: V3,
-    pub r_torque: V3,
+pub struct ContactHistory<L = f64> {
+    pub shear: [L; 3],
+    pub r_torque: [L; 3],
 }
 
 impl ContactHistory {
@@ -176,39 +256,42 @@ impl ContactHistory {
     }
 }
 
-/// Values of one evaluated contact, for observers and tests.
+/// Values of one evaluated contact per lane, for observers and tests.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ContactOutcome {
-    pub normal: normal::NormalForce,
+pub struct ContactOutcome<L: Lanes = f64> {
+    pub normal: normal::NormalForce<L>,
     /// Tangential force on i.
-    pub ft: V3,
+    pub ft: [L; 3],
     /// Rolling torque as LIGGGHTS computes it; i receives `-r_torque`, j `+r_torque`.
-    pub r_torque: V3,
+    pub r_torque: [L; 3],
     /// epsd_implicit: the dashpot coefficient C_r left to the integrator (0 when the spring
     /// is at its limit); the dashpot torque on i is `-C_r P (w_i - w_j)`, P the projector
     /// onto the tangent plane (identity with torsionTorque).
-    pub implicit_damping: f64,
+    pub implicit_damping: L,
     /// The rolling resistance is at full mobilisation: the spring at its limit
-    /// `|M| = mu_r R* |Fn|` (epsd, epsd2, epsd3; the epsd dashpot is then off), or any rolling
-    /// contact with cdt (no spring, always at the limit).
-    pub rolling_mobilised: bool,
+    /// `|M| = mu_r R* |Fn|` (epsd, epsd2, epsd3, epsd_implicit; the epsd dashpot is then
+    /// off), or any rolling contact with cdt (no spring, always at the limit).
+    pub rolling_mobilised: L::M,
 }
 
-/// Evaluates one touching contact: `ContactModel::surfacesIntersect` for
-/// surface default x normal hertz x tangential history x rolling `p.rolling`.
-/// Updates `hist` only when `update_history` (LIGGGHTS `computeflag && shearupdate`).
-pub fn surfaces_intersect(
-    cd: &mut ContactData,
+/// Evaluates touching contacts: `ContactModel::surfacesIntersect` (contact_models.h) for
+/// surface default -> normal hertz -> tangential history -> rolling `p.rolling`, in that
+/// order, the one composition of the contact law. Updates `hist` only when
+/// `update_history` (LIGGGHTS `computeflag && shearupdate`).
+#[inline(always)]
+pub fn surfaces_intersect<L: Lanes>(
+    cd: &mut ContactData<L>,
     p: &PairParams,
-    hist: &mut ContactHistory,
+    hist: &mut ContactHistory<L>,
     update_history: bool,
-) -> (ForceData, ForceData, ContactOutcome) {
-    let mut fi = ForceData::default();
-    let mut fj = ForceData::default();
-    surface::default_surface(cd);
-    let nf = normal::hertz(cd, p);
-    normal::apply(cd, &nf, &mut fi, &mut fj);
-    let ft = tangential::history(
+) -> (ForceData<L>, ForceData<L>, ContactOutcome<L>) {
+    let zero = L::splat(0.0);
+    let mut fi = ForceData::zero();
+    let mut fj = ForceData::zero();
+    surface::default::surface(cd);
+    let nf = normal::hertz::force(cd, p);
+    normal::hertz::apply(cd, &nf, &mut fi, &mut fj);
+    let ft = tangential::history::force(
         cd,
         &nf,
         p,
@@ -217,23 +300,26 @@ pub fn surfaces_intersect(
         &mut fi,
         &mut fj,
     );
-    let mut implicit_damping = 0.0;
-    let (r_torque, rolling_mobilised) = match p.rolling {
-        RollingModel::Off => ([0.0; 3], false),
-        RollingModel::Cdt => rolling::cdt::torque(cd, &nf, p),
-        RollingModel::Epsd => rolling::epsd::torque(cd, &nf, p, &mut hist.r_torque, update_history),
+    let r = &mut hist.r_torque;
+    let (r_torque, implicit_damping, rolling_mobilised) = match p.rolling {
+        RollingModel::Off => ([zero; 3], zero, no_lanes::<L>()),
+        RollingModel::Cdt => {
+            let (m, mobilised) = rolling::cdt::torque(cd, &nf, p);
+            (m, zero, mobilised)
+        }
+        RollingModel::Epsd => {
+            let (m, mobilised) = rolling::epsd::torque(cd, &nf, p, r, update_history);
+            (m, zero, mobilised)
+        }
         RollingModel::Epsd2 => {
-            rolling::epsd2::torque(cd, &nf, p, &mut hist.r_torque, update_history)
+            let (m, mobilised) = rolling::epsd2::torque(cd, &nf, p, r, update_history);
+            (m, zero, mobilised)
         }
         RollingModel::Epsd3 => {
-            rolling::epsd3::torque(cd, &nf, p, &mut hist.r_torque, update_history)
+            let (m, mobilised) = rolling::epsd3::torque(cd, &nf, p, r, update_history);
+            (m, zero, mobilised)
         }
-        RollingModel::EpsdImplicit => {
-            let (m, c, capped) =
-                rolling::epsd::spring_only(cd, &nf, p, &mut hist.r_torque, update_history);
-            implicit_damping = c;
-            (m, capped)
-        }
+        RollingModel::EpsdImplicit => rolling::epsd_implicit::torque(cd, &nf, p, r, update_history),
     };
     if p.rolling != RollingModel::Off {
         rolling::apply(r_torque, &mut fi, &mut fj);

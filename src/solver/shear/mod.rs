@@ -23,7 +23,7 @@ mod walls;
 pub use observe::{PlateRecord, Snapshot};
 pub use pairs::KernelPath;
 
-use super::contact::{moved_beyond_half_skin, ContactData, ForceData};
+use super::contact::{moved_beyond_half_skin, pair_geometry, ContactData, ForceData};
 use super::integrate::{Kick, NveSphere};
 use super::material::{sphere_mass, PairParams};
 use super::team::{bounds, split_mut, Team};
@@ -951,12 +951,8 @@ pub(crate) fn pair_contact(
     v: (V3, V3),
     omega: (V3, V3),
 ) -> Option<ContactData> {
-    let (xi, xj) = x;
-    let xj = [xj[0] + p.shift[0], xj[1] + p.shift[1], xj[2] + p.shift[2]];
-    let delta = [xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]];
-    let rsq = delta[0] * delta[0] + delta[1] * delta[1] + delta[2] * delta[2];
-    let radsum = radius.0 + radius.1;
-    if rsq >= radsum * radsum {
+    let (delta, rsq, touch) = pair_geometry(x.0, x.1, p.shift, radius.0, radius.1);
+    if !touch {
         return None;
     }
     Some(ContactData::pair(

@@ -1,5 +1,4 @@
 //! Normal contact models. Keyword = LIGGGHTS `model <kw>` (normal_model_<kw>.h).
 
-mod hertz;
-pub(crate) use hertz::SQRT_FIVE_OVER_SIX;
-pub use hertz::{apply, hertz, NormalForce};
+pub mod hertz;
+pub use hertz::NormalForce;

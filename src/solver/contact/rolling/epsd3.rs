@@ -1,37 +1,42 @@
 //! `rolling_friction epsd3` (rolling_model_epsd3.h): epsd with a user stiffness factor.
 
+use super::super::lanes::Lanes;
 use super::super::normal::NormalForce;
 use super::super::ContactData;
 use super::spring_dashpot;
 use crate::solver::material::PairParams;
-use crate::solver::vec3::V3;
 
 /// As epsd but `k_r = coeffRollStiffness kn mu_r^2 reff^2` (evaluated
 /// `coeffRollStiffness*kn*rmu*rmu*reff*reff`). Walls use `radius = radi` for `reff` and
 /// `I_r = 1.4 mi radi^2`, the same values epsd uses.
-pub fn torque(
-    cd: &ContactData,
-    nf: &NormalForce,
+#[inline(always)]
+pub fn torque<L: Lanes>(
+    cd: &ContactData<L>,
+    nf: &NormalForce<L>,
     p: &PairParams,
-    hist: &mut V3,
+    hist: &mut [L; 3],
     update_history: bool,
-) -> (V3, bool) {
-    let rmu = p.coeff_roll_frict;
-    spring_dashpot(cd, nf, p, hist, update_history, |kn, reff| {
-        stiffness(p.coeff_roll_stiffness, kn, rmu, reff)
-    })
+) -> ([L; 3], L::M) {
+    let kr = stiffness(
+        L::splat(p.coeff_roll_stiffness),
+        nf.kn,
+        L::splat(p.coeff_roll_frict),
+        cd.reff(),
+    );
+    spring_dashpot(cd, nf, p, kr, hist, update_history)
 }
 
 /// epsd3's rolling stiffness `k_r = coeffRollStiffness kn mu_r^2 reff^2`, evaluated left to
 /// right as LIGGGHTS does. Also used by the stability estimate.
-pub fn stiffness(coeff_roll_stiffness: f64, kn: f64, mu_r: f64, reff: f64) -> f64 {
+#[inline(always)]
+pub fn stiffness<L: Lanes>(coeff_roll_stiffness: L, kn: L, mu_r: L, reff: L) -> L {
     coeff_roll_stiffness * kn * mu_r * mu_r * reff * reff
 }
 
 #[cfg(test)]
 mod tests {
     use super::super::super::normal::hertz;
-    use super::super::super::surface::default_surface;
+    use super::super::super::surface::default::surface;
     use super::super::super::test_support::{pair, params};
     use super::*;
     use crate::spec::RollingModel;
@@ -42,8 +47,8 @@ mod tests {
         let mut p = params(RollingModel::Epsd3);
         p.coeff_roll_visc = 0.0;
         let mut cd = pair([0.0, 100.0, 0.0]);
-        default_surface(&mut cd);
-        let nf = hertz(&cd, &p);
+        surface(&mut cd);
+        let nf = hertz::force(&cd, &p);
         let mut hist = [0.0; 3];
         let (m, mobilised) = torque(&cd, &nf, &p, &mut hist, true);
         assert!(!mobilised);

@@ -1,29 +1,37 @@
-//! Rolling resistance. Keyword = LIGGGHTS `rolling_friction <kw>` (rolling_model_<kw>.h).
-//! The variants do not share a formula: cdt uses `kn deltan`, epsd/epsd3 build `k_r` from
-//! `kn`, epsd2 from `kt`; only epsd and epsd3 have the viscous dashpot.
+//! Rolling resistance. Keyword = LIGGGHTS `rolling_friction <kw>` (rolling_model_<kw>.h);
+//! `epsd_implicit` is ours (epsd's spring with the dashpot left to the integrator). The
+//! variants do not share a formula: cdt uses `kn deltan`, epsd/epsd3 build `k_r` from
+//! `kn`, epsd2 from `kt`; only epsd and epsd3 add the viscous dashpot in the kernel. What
+//! they share (the relative rotation, its tangential part, the rolling inertia, the
+//! elastic-plastic spring, the dashpot coefficient) is written once here.
 
 pub mod cdt;
 pub mod epsd;
 pub mod epsd2;
 pub mod epsd3;
+pub mod epsd_implicit;
 
+use super::lanes::{select3, Lanes, Mask};
 use super::normal::NormalForce;
-use super::{ContactData, ForceData};
+use super::{dot, ContactData, ForceData};
 use crate::solver::material::PairParams;
-use crate::solver::vec3::V3;
+
+pub use super::pair_reff;
 
 /// Adds the rolling torque as every rolling header does: `i -= r_torque`, `j += r_torque`
 /// (the j part is discarded for walls).
-pub fn apply(r_torque: V3, fi: &mut ForceData, fj: &mut ForceData) {
+#[inline(always)]
+pub fn apply<L: Lanes>(r_torque: [L; 3], fi: &mut ForceData<L>, fj: &mut ForceData<L>) {
     for k in 0..3 {
-        fi.delta_torque[k] -= r_torque[k];
-        fj.delta_torque[k] += r_torque[k];
+        fi.delta_torque[k] = fi.delta_torque[k] - r_torque[k];
+        fj.delta_torque[k] = fj.delta_torque[k] + r_torque[k];
     }
 }
 
 /// Relative angular velocity the rolling models see: `omega_i - omega_j` for pairs,
 /// the surface model's `wr = cr omega_i / r` for walls.
-pub fn relative_rotation(cd: &ContactData) -> V3 {
+#[inline(always)]
+pub fn relative_rotation<L: Lanes>(cd: &ContactData<L>) -> [L; 3] {
     if cd.is_wall {
         cd.wr
     } else {
@@ -35,23 +43,10 @@ pub fn relative_rotation(cd: &ContactData) -> V3 {
     }
 }
 
-/// `reff`: `radi` for walls, else [`pair_reff`].
-pub fn reff(cd: &ContactData) -> f64 {
-    if cd.is_wall {
-        cd.radi
-    } else {
-        pair_reff(cd.radi, cd.radj)
-    }
-}
-
-/// `reff` of a pair: `radi radj / (radi + radj)`.
-pub fn pair_reff(radi: f64, radj: f64) -> f64 {
-    radi * radj / (radi + radj)
-}
-
 /// Rolling inertia of epsd/epsd3 (3D): wall [`wall_rolling_inertia`], pair
 /// [`pair_rolling_inertia`].
-pub fn rolling_inertia(cd: &ContactData, reff: f64) -> f64 {
+#[inline(always)]
+pub fn rolling_inertia<L: Lanes>(cd: &ContactData<L>, reff: L) -> L {
     if cd.is_wall {
         wall_rolling_inertia(cd.mi, reff)
     } else {
@@ -60,75 +55,102 @@ pub fn rolling_inertia(cd: &ContactData, reff: f64) -> f64 {
 }
 
 /// Rolling inertia at a wall: `1.4 mi reff^2`, evaluated left to right.
-pub fn wall_rolling_inertia(mi: f64, reff: f64) -> f64 {
-    1.4 * mi * reff * reff
+#[inline(always)]
+pub fn wall_rolling_inertia<L: Lanes>(mi: L, reff: L) -> L {
+    L::splat(1.4) * mi * reff * reff
 }
 
 /// Rolling inertia of a pair: `1.4 (mi radi^2)(mj radj^2) / (mi radi^2 + mj radj^2)`,
 /// evaluated left to right.
-pub fn pair_rolling_inertia(mi: f64, radi: f64, mj: f64, radj: f64) -> f64 {
+#[inline(always)]
+pub fn pair_rolling_inertia<L: Lanes>(mi: L, radi: L, mj: L, radj: L) -> L {
     let a = mi * radi * radi;
     let b = mj * radj * radj;
-    1.4 * a * b / (a + b)
+    L::splat(1.4) * a * b / (a + b)
 }
 
 /// The part of `wr` the spring sees: all of it with `torsionTorque on`, else the part
 /// perpendicular to the normal, `wr - (wr . en) en`.
-pub fn tangential_part(wr: V3, en: V3, torsion_torque: bool) -> V3 {
+#[inline(always)]
+pub fn tangential_part<L: Lanes>(wr: [L; 3], en: [L; 3], torsion_torque: bool) -> [L; 3] {
     if torsion_torque {
         wr
     } else {
-        let d = wr[0] * en[0] + wr[1] * en[1] + wr[2] * en[2];
+        let d = dot(wr, en);
         [wr[0] - en[0] * d, wr[1] - en[1] * d, wr[2] - en[2] * d]
     }
 }
 
-/// The elastic-plastic spring shared by epsd, epsd2 and epsd3 (`calcRollTorque`):
-/// `M = M_old + k_r dt wr_tot`; if `|M| > |Fn| reff mu_r`, scale it onto that limit.
-/// Returns (`M`, whether it was capped). The caller decides what is stored and whether the
-/// dashpot is added, since the three headers differ there.
-pub fn spring(old: V3, wr_tot: V3, kr: f64, dt: f64, m_max: f64) -> (V3, bool) {
-    let s = dt * kr;
-    let mut m = [
-        old[0] + wr_tot[0] * s,
-        old[1] + wr_tot[1] * s,
-        old[2] + wr_tot[2] * s,
-    ];
-    let mag = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
-    if mag > m_max {
-        let factor = m_max / mag;
-        m = [m[0] * factor, m[1] * factor, m[2] * factor];
-        (m, true)
-    } else {
-        (m, false)
-    }
-}
-
-/// The body shared by epsd and epsd3 (`calcRollTorque`), given the model's `k_r(kn, reff)`:
-/// `M = M_old + k_r dt wr_tot`, capped at `|Fn| reff mu_r`; the history stores `M`; below the
-/// cap the dashpot `C_r wr_tot`, `C_r = eta_r 2 sqrt(I_r k_r)`, is added but never stored.
-pub fn spring_dashpot(
-    cd: &ContactData,
-    nf: &NormalForce,
+/// The elastic-plastic spring shared by epsd, epsd2, epsd3 and epsd_implicit
+/// (`calcRollTorque`), given the model's `k_r`: `M = M_old + wr_tot (dt k_r)`, with
+/// `wr_tot` the [`tangential_part`] of the [`relative_rotation`]; if `|M| > |Fn| reff mu_r`,
+/// `M` is scaled onto that limit. The history stores `M` when updating. Returns `M`,
+/// `wr_tot` and the lanes at the limit; whether a dashpot is added is the model's.
+#[inline(always)]
+pub fn spring<L: Lanes>(
+    cd: &ContactData<L>,
+    nf: &NormalForce<L>,
     p: &PairParams,
-    hist: &mut V3,
+    kr: L,
+    hist: &mut [L; 3],
     update_history: bool,
-    kr: impl Fn(f64, f64) -> f64,
-) -> (V3, bool) {
-    let reff = reff(cd);
-    let r_inertia = rolling_inertia(cd, reff);
+) -> ([L; 3], [L; 3], L::M) {
     let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
-    let kr = kr(nf.kn, reff);
-    let m_max = nf.fn_.abs() * reff * p.coeff_roll_frict;
-    let (mut m, capped) = spring(*hist, wr_tot, kr, p.dt, m_max);
+    let m_max = nf.fn_.abs() * cd.reff() * L::splat(p.coeff_roll_frict);
+    let s = L::splat(p.dt) * kr;
+    let mut m = [
+        hist[0] + wr_tot[0] * s,
+        hist[1] + wr_tot[1] * s,
+        hist[2] + wr_tot[2] * s,
+    ];
+    let mag = dot(m, m).sqrt();
+    let capped = mag.gt(m_max);
+    if capped.any() {
+        let factor = m_max / mag;
+        m = select3(capped, [m[0] * factor, m[1] * factor, m[2] * factor], m);
+    }
     if update_history {
         *hist = m;
     }
-    if !capped {
-        let r_coef = p.coeff_roll_visc * 2.0 * (r_inertia * kr).sqrt();
-        for k in 0..3 {
-            m[k] += r_coef * wr_tot[k];
-        }
+    (m, wr_tot, capped)
+}
+
+/// The dashpot coefficient of epsd, epsd3 and epsd_implicit below the limit:
+/// `C_r = eta_r 2 sqrt(I_r k_r)`, evaluated `(eta_r 2) sqrt(I_r k_r)`. With eta_r = 0 it is
+/// `+0 sqrt(x)` = +0 for the finite `I_r k_r >= 0` of a touching contact: the square root is
+/// skipped.
+#[inline(always)]
+pub fn dashpot_coefficient<L: Lanes>(cd: &ContactData<L>, p: &PairParams, kr: L) -> L {
+    if p.coeff_roll_visc == 0.0 {
+        L::splat(0.0)
+    } else {
+        let r_inertia = rolling_inertia(cd, cd.reff());
+        L::splat(p.coeff_roll_visc * 2.0) * (r_inertia * kr).sqrt()
     }
-    (m, capped)
+}
+
+/// The body shared by epsd and epsd3 (`calcRollTorque`), given the model's `k_r`: the
+/// [`spring`], and below the limit the dashpot `C_r wr_tot` ([`dashpot_coefficient`]) added
+/// to the applied torque but never stored; at the limit the dashpot is off.
+#[inline(always)]
+pub fn spring_dashpot<L: Lanes>(
+    cd: &ContactData<L>,
+    nf: &NormalForce<L>,
+    p: &PairParams,
+    kr: L,
+    hist: &mut [L; 3],
+    update_history: bool,
+) -> ([L; 3], L::M) {
+    let (m, wr_tot, capped) = spring(cd, nf, p, kr, hist, update_history);
+    if capped.not().any() {
+        let r_coef = dashpot_coefficient(cd, p, kr);
+        let damped = [
+            m[0] + r_coef * wr_tot[0],
+            m[1] + r_coef * wr_tot[1],
+            m[2] + r_coef * wr_tot[2],
+        ];
+        (select3(capped, m, damped), capped)
+    } else {
+        (m, capped)
+    }
 }

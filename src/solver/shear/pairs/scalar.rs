@@ -4,7 +4,7 @@
 use super::super::neighbor::Pair;
 use super::super::{pair_contact, PairContact, PairDamp, PairState};
 use super::Particles;
-use crate::solver::contact::{surfaces_intersect, ContactHistory, ForceData};
+use crate::solver::contact::{surfaces_intersect, tangential, ContactHistory, ForceData};
 use crate::solver::material::PairParams;
 
 /// One pair by the scalar kernels: its history (updated in place); returns i's and j's
@@ -28,15 +28,13 @@ pub(super) fn scalar_one(
         return Default::default();
     };
     let (fi, fj, o) = surfaces_intersect(&mut cd, params, hist, update_history);
-    let ft2 = o.ft[0] * o.ft[0] + o.ft[1] * o.ft[1] + o.ft[2] * o.ft[2];
-    let cap = params.coeff_frict * o.normal.fn_.abs();
     let state = PairState {
         contact: if o.rolling_mobilised {
             PairContact::RollingMobilised
         } else {
             PairContact::Touching
         },
-        sliding: ft2 >= cap * cap * (1.0 - 1e-9),
+        sliding: tangential::history::sliding(o.ft, o.normal.fn_, params),
     };
     let damp = PairDamp {
         damping: o.implicit_damping,

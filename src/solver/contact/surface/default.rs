@@ -1,7 +1,8 @@
 //! Surface model `default` (surface_model_default.h, `SurfaceModel<SURFACE_DEFAULT>::
 //! surfacesIntersect`): relative velocities at the contact.
 
-use super::ContactData;
+use super::super::lanes::Lanes;
+use super::super::ContactData;
 
 /// Mirrors surface_model_default.h for spheres:
 /// - `vr = v_i - v_j`, `vn = vr . en`, `vt = vr - vn en`;
@@ -13,7 +14,8 @@ use super::ContactData;
 /// - `vtr = vt - (delta x wr)` written component-wise as `vt1 - (dz wr2 - dy wr3)` etc.
 ///
 /// Writes `vn`, `deltan`, `wr`, `vtr`, `cri`, `crj` into `cd`.
-pub fn default_surface(cd: &mut ContactData) {
+#[inline(always)]
+pub fn surface<L: Lanes>(cd: &mut ContactData<L>) {
     let [enx, eny, enz] = cd.en;
     let vr1 = cd.v_i[0] - cd.v_j[0];
     let vr2 = cd.v_i[1] - cd.v_j[1];
@@ -25,16 +27,17 @@ pub fn default_surface(cd: &mut ContactData) {
     let deltan = cd.radsum - cd.r;
     let [dx, dy, dz] = cd.delta;
     let rinv = cd.rinv;
+    let half = L::splat(0.5);
     let (wr1, wr2, wr3);
     if cd.is_wall {
-        let cr = cd.radi - 0.5 * cd.deltan;
+        let cr = cd.radi - half * cd.deltan;
         wr1 = cr * cd.omega_i[0] * rinv;
         wr2 = cr * cd.omega_i[1] * rinv;
         wr3 = cr * cd.omega_i[2] * rinv;
         cd.cri = cr;
     } else {
-        let cri = cd.radi - 0.5 * deltan;
-        let crj = cd.radj - 0.5 * deltan;
+        let cri = cd.radi - half * deltan;
+        let crj = cd.radj - half * deltan;
         wr1 = (cri * cd.omega_i[0] + crj * cd.omega_j[0]) * rinv;
         wr2 = (cri * cd.omega_i[1] + crj * cd.omega_j[1]) * rinv;
         wr3 = (cri * cd.omega_i[2] + crj * cd.omega_j[2]) * rinv;
@@ -53,7 +56,7 @@ pub fn default_surface(cd: &mut ContactData) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::pair;
+    use super::super::super::test_support::pair;
     use super::*;
     use approx::assert_relative_eq;
 
@@ -62,7 +65,7 @@ mod tests {
         // i on top spins about +y at 100 rad/s; contact point lies at -z from i's centre at
         // distance cri, so it moves at omega x (-cri ez) = -cri*100 ex; j is at rest.
         let mut cd = pair([0.0, 100.0, 0.0]);
-        default_surface(&mut cd);
+        surface(&mut cd);
         let cri = 1e-3 - 0.5 * cd.deltan;
         assert_relative_eq!(cd.deltan, 1e-6, max_relative = 1e-9);
         assert_eq!(cd.vn, 0.0);
@@ -80,7 +83,7 @@ mod tests {
         cd.deltan = 2e-6;
         cd.r = cd.radi - cd.deltan;
         cd.rinv = 1.0 / cd.r;
-        default_surface(&mut cd);
+        surface(&mut cd);
         assert_eq!(cd.cri, 1e-3 - 1e-6);
         assert_relative_eq!(
             cd.wr[1],
