@@ -594,6 +594,52 @@ mod tests {
         assert_eq!(time_step(&m, 0.010), 1e-7);
     }
 
+    /// A two-sphere run lasts 5 steps of approach and twice Hertz's duration for the pair's
+    /// reduced mass and radius (computed here from the case's spheres; a cargo-mutants
+    /// survivor: a wrong reduced mass only lengthened the unequal-radii run).
+    #[test]
+    fn two_sphere_runs_last_twice_the_hertz_duration() {
+        for b in cases().iter().filter(|b| b.case.wall.is_none()) {
+            let c = &b.case;
+            let (p0, p1) = (&c.particles[0], &c.particles[1]);
+            let rho = c.material.density;
+            let (m1, m2) = (
+                4.0 / 3.0 * std::f64::consts::PI * p0.radius.powi(3) * rho,
+                4.0 / 3.0 * std::f64::consts::PI * p1.radius.powi(3) * rho,
+            );
+            let mr = m1 * m2 / (m1 + m2);
+            let rr = p0.radius * p1.radius / (p0.radius + p1.radius);
+            let v = p0.velocity[0] - p1.velocity[0];
+            let t = hertz_collision(y_eff(&c.material, None), rr, mr, v).duration;
+            let expect = 5 + (2.0 * t / c.dt).ceil() as u64;
+            assert!(
+                c.steps.abs_diff(expect) <= 1,
+                "{}: {} steps, {expect}",
+                c.name,
+                c.steps
+            );
+        }
+    }
+
+    /// A series of one row is refused as nothing to judge; two rows are judged (here refused
+    /// for another reason: no contact in them). A cargo-mutants survivor moved the bound.
+    #[test]
+    fn one_row_is_nothing_to_judge_two_are_judged() {
+        let b = &cases()[0];
+        let columns: Vec<String> = ["x_1_x[m]", "x_2_x[m]", "fn[N]", "v_1_x[m/s]", "v_2_x[m/s]"]
+            .map(String::from)
+            .to_vec();
+        let s = |n: usize| Series {
+            columns: columns.clone(),
+            steps: (0..n as u64).collect(),
+            rows: vec![vec![0.0; 5]; n],
+        };
+        let e = judge(b, &s(1)).unwrap_err().to_string();
+        assert!(e.contains("nothing to judge"), "{e}");
+        let e = judge(b, &s(2)).unwrap_err().to_string();
+        assert!(!e.contains("nothing to judge"), "{e}");
+    }
+
     #[test]
     fn sliding_starts_above_the_impulse_threshold() {
         // 3.5 x 0.092 x 1.98 = 0.6376 = tan(32.5 deg); with the 20 % margin 37.4 deg

@@ -571,6 +571,13 @@ mod shear_tests {
         lockstep(&a, &a, &["top_g"], 1e-6);
     }
 
+    /// The steady window is the second half of the stage, wherever the stage starts.
+    #[test]
+    fn steady_window_is_the_second_half_of_the_stage() {
+        assert_eq!(steady_window(0, 30), (15, 30));
+        assert_eq!(steady_window(100, 300), (200, 300));
+    }
+
     #[test]
     fn steady_mean_and_ci() {
         let (m, ci) = mean_ci95(&[1.0, 2.0, 3.0]);

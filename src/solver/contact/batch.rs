@@ -59,7 +59,7 @@ pub fn touching<L: Lanes>(xi: [L; 3], xj: [L; 3], shift: [L; 3], radi: L, radj: 
 /// `shearupdate`.
 #[inline(always)]
 pub fn pair<L: Lanes>(a: &PairIn<L>, p: &PairParams, update_history: bool) -> PairOut<L> {
-    let zero = L::splat(0.0);
+    let zero = a.radi.splat(0.0);
     let (delta, rsq, touch) = pair_geometry(a.xi, a.xj, a.shift, a.radi, a.radj);
     let mut cd = ContactData::pair(
         delta,

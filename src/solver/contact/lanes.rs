@@ -11,6 +11,15 @@
 //! - comparisons keep Rust's NaN semantics: `<`, `<=`, `>`, `>=` are false on NaN (ordered
 //!   predicates), `!=` is true on NaN (unordered predicate).
 //!
+//! Why no safe call can run an instruction the CPU lacks: a value of [`F8`] (AVX-512) or
+//! [`F4`] (AVX) is made only by an `unsafe` constructor ([`F8::load`], [`F8::gather`],
+//! [`F8::from_raw`], [`F4::load`], [`F4::from_raw`]), whose caller states that the CPU has the
+//! features (the pair passes, after `is_x86_feature_detected!`), or from values that already
+//! exist: the operators, [`Lanes::splat`] (which takes a value of its type as that proof) and
+//! the comparisons (whose masks [`M8`], [`M4`] are likewise made only from vectors). Their
+//! fields are private. So every safe method that executes AVX-512 or AVX has, in `self` or an
+//! argument, a value whose existence proves the CPU runs it.
+//!
 //! Branches of the scalar code become masks: both sides are computed for every lane and
 //! [`Lanes::select`] keeps the side the scalar code would have taken. A side that is not
 //! taken may compute a NaN or an infinity (a division by zero), which is discarded; floating
@@ -56,7 +65,9 @@ pub trait Lanes:
     + Neg<Output = Self>
 {
     type M: Mask;
-    fn splat(v: f64) -> Self;
+    /// A vector of this type with `v` in every lane. `self` is not read: it is the proof
+    /// that this type's instructions run on this CPU (module doc).
+    fn splat(self, v: f64) -> Self;
     fn sqrt(self) -> Self;
     /// Clears the sign bit (`f64::abs`).
     fn abs(self) -> Self;
@@ -75,7 +86,7 @@ pub trait Lanes:
 impl Lanes for f64 {
     type M = bool;
     #[inline(always)]
-    fn splat(v: f64) -> Self {
+    fn splat(self, v: f64) -> Self {
         v
     }
     #[inline(always)]
@@ -127,19 +138,20 @@ pub use avx512::{F8, M8};
 
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
-    //! 8 lanes of f64 in one AVX-512 register. A value of [`F8`] can only be made inside a
-    //! function compiled with `avx512f`, which callers enter only after
-    //! `is_x86_feature_detected!("avx512f")`: the wrappers below are `#[inline(always)]` so
-    //! that they are compiled into that function with its target features.
+    //! 8 lanes of f64 in one AVX-512 register. A value of [`F8`] exists only where the CPU
+    //! has avx512f: it is made by an `unsafe` constructor that states so, or from an existing
+    //! one (parent module doc). The wrappers are `#[inline(always)]` so that they are compiled
+    //! into the `avx512f` function that uses them, with its target features.
     use super::{Lanes, Mask};
     use std::arch::x86_64::*;
     use std::ops::{Add, Div, Mul, Neg, Sub};
 
     #[derive(Clone, Copy)]
-    pub struct F8(pub __m512d);
+    pub struct F8(__m512d);
 
+    /// A lane mask of [`F8`]: made only by comparing two of them.
     #[derive(Clone, Copy)]
-    pub struct M8(pub __mmask8);
+    pub struct M8(__mmask8);
 
     impl Mask for M8 {
         #[inline(always)]
@@ -166,7 +178,7 @@ mod avx512 {
                 type Output = F8;
                 #[inline(always)]
                 fn $f(self, o: F8) -> F8 {
-                    // SAFETY: F8 exists only inside avx512f code (module doc).
+                    // SAFETY: `self` exists, so the CPU has avx512f (module doc).
                     F8(unsafe { $intr(self.0, o.0) })
                 }
             }
@@ -181,7 +193,8 @@ mod avx512 {
         type Output = F8;
         #[inline(always)]
         fn neg(self) -> F8 {
-            // SAFETY: as above. Flips the sign bit, as Rust's `-x`.
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc). Flips the sign
+            // bit, as Rust's `-x`.
             F8(unsafe {
                 _mm512_castsi512_pd(_mm512_xor_si512(
                     _mm512_castpd_si512(self.0),
@@ -194,46 +207,44 @@ mod avx512 {
     impl Lanes for F8 {
         type M = M8;
         #[inline(always)]
-        fn splat(v: f64) -> Self {
-            // SAFETY: F8 exists only inside avx512f code (module doc); `splat` makes a first
-            // value, and only such code calls it: a rule the types do not yet prove (issue
-            // #38 item 5).
+        fn splat(self, v: f64) -> Self {
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             F8(unsafe { _mm512_set1_pd(v) })
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             F8(unsafe { _mm512_sqrt_pd(self.0) })
         }
         #[inline(always)]
         fn abs(self) -> Self {
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             F8(unsafe { _mm512_abs_pd(self.0) })
         }
         #[inline(always)]
         fn gt(self, o: Self) -> M8 {
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             M8(unsafe { _mm512_cmp_pd_mask::<_CMP_GT_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn ge(self, o: Self) -> M8 {
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             M8(unsafe { _mm512_cmp_pd_mask::<_CMP_GE_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn le(self, o: Self) -> M8 {
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             M8(unsafe { _mm512_cmp_pd_mask::<_CMP_LE_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn ne(self, o: Self) -> M8 {
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx512f (module doc).
             M8(unsafe { _mm512_cmp_pd_mask::<_CMP_NEQ_UQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn select(m: M8, t: Self, f: Self) -> Self {
             // blend(k, a, b): b where k is set, else a
-            // SAFETY: F8 exists only inside avx512f code (module doc).
+            // SAFETY: `t` exists, so the CPU has avx512f (module doc).
             F8(unsafe { _mm512_mask_blend_pd(m.0, f.0, t.0) })
         }
     }
@@ -249,24 +260,42 @@ mod avx512 {
         }
 
         /// The 8 lanes from an array (lane `l` is `a[l]`).
+        ///
+        /// # Safety
+        /// The CPU has avx512f.
         #[inline(always)]
-        pub fn load(a: &[f64; 8]) -> F8 {
-            // SAFETY: an unaligned load of 64 bytes from a 64-byte array; F8 exists only
-            // inside avx512f code (module doc).
-            F8(unsafe { _mm512_loadu_pd(a.as_ptr()) })
+        pub unsafe fn load(a: &[f64; 8]) -> F8 {
+            F8(_mm512_loadu_pd(a.as_ptr()))
+        }
+
+        /// The vector of a register.
+        ///
+        /// # Safety
+        /// The CPU has avx512f.
+        #[inline(always)]
+        pub unsafe fn from_raw(v: __m512d) -> F8 {
+            F8(v)
+        }
+
+        /// The register of the vector.
+        #[inline(always)]
+        pub fn raw(self) -> __m512d {
+            self.0
         }
 
         /// The 8 lanes as an array.
         #[inline(always)]
         pub fn to_array(self) -> [f64; 8] {
             let mut a = [0.0; 8];
-            // SAFETY: an unaligned store of 64 bytes into a 64-byte array.
+            // SAFETY: an unaligned store of 64 bytes into a 64-byte array; `self` exists, so
+            // the CPU has avx512f (module doc).
             unsafe { _mm512_storeu_pd(a.as_mut_ptr(), self.0) };
             a
         }
     }
 
     impl M8 {
+        /// One bit per lane (lane 0 lowest).
         pub fn bits(self) -> u8 {
             self.0
         }
@@ -279,38 +308,39 @@ pub use avx2::{F4, M4};
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     //! 4 lanes of f64 in one AVX register (the path of CPUs with AVX2 but without AVX-512).
-    //! As for [`super::F8`]: a value of [`F4`] is made only inside a function compiled with
-    //! `avx,avx2`, entered after `is_x86_feature_detected!("avx2")`; the wrappers are
-    //! `#[inline(always)]`. A mask is the comparison's result, all ones or all zeros per lane.
+    //! As for [`super::F8`]: a value of [`F4`] exists only where the CPU has avx and avx2 (an
+    //! `unsafe` constructor states so, or it is made from an existing one); the wrappers are
+    //! `#[inline(always)]`. A mask is the comparison's result, all ones or all zeros per lane,
+    //! made only by comparing two vectors.
     use super::{Lanes, Mask};
     use std::arch::x86_64::*;
     use std::ops::{Add, Div, Mul, Neg, Sub};
 
     #[derive(Clone, Copy)]
-    pub struct F4(pub __m256d);
+    pub struct F4(__m256d);
 
     #[derive(Clone, Copy)]
-    pub struct M4(pub __m256d);
+    pub struct M4(__m256d);
 
     impl Mask for M4 {
         #[inline(always)]
         fn and(self, o: Self) -> Self {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_and_pd(self.0, o.0) })
         }
         #[inline(always)]
         fn or(self, o: Self) -> Self {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_or_pd(self.0, o.0) })
         }
         #[inline(always)]
         fn not(self) -> Self {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_xor_pd(self.0, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))) })
         }
         #[inline(always)]
         fn any(self) -> bool {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             unsafe { _mm256_movemask_pd(self.0) != 0 }
         }
     }
@@ -321,7 +351,7 @@ mod avx2 {
                 type Output = F4;
                 #[inline(always)]
                 fn $f(self, o: F4) -> F4 {
-                    // SAFETY: F4 exists only inside avx code (module doc).
+                    // SAFETY: `self` exists, so the CPU has avx (module doc).
                     F4(unsafe { $intr(self.0, o.0) })
                 }
             }
@@ -336,7 +366,8 @@ mod avx2 {
         type Output = F4;
         #[inline(always)]
         fn neg(self) -> F4 {
-            // SAFETY: as above. Flips the sign bit, as Rust's `-x`.
+            // SAFETY: `self` exists, so the CPU has avx (module doc). Flips the sign bit,
+            // as Rust's `-x`.
             F4(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
         }
     }
@@ -344,66 +375,82 @@ mod avx2 {
     impl Lanes for F4 {
         type M = M4;
         #[inline(always)]
-        fn splat(v: f64) -> Self {
-            // SAFETY: F4 exists only inside avx/avx2 code (module doc); `splat` makes a first
-            // value, and only such code calls it: a rule the types do not yet prove (issue
-            // #38 item 5).
+        fn splat(self, v: f64) -> Self {
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             F4(unsafe { _mm256_set1_pd(v) })
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
-            // SAFETY: F4 exists only inside avx/avx2 code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx and avx2 (module doc).
             F4(unsafe { _mm256_sqrt_pd(self.0) })
         }
         #[inline(always)]
         fn abs(self) -> Self {
             // clears the sign bit, as `f64::abs`
-            // SAFETY: F4 exists only inside avx/avx2 code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx and avx2 (module doc).
             F4(unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0) })
         }
         #[inline(always)]
         fn gt(self, o: Self) -> M4 {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_cmp_pd::<_CMP_GT_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn ge(self, o: Self) -> M4 {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn le(self, o: Self) -> M4 {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_cmp_pd::<_CMP_LE_OQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn ne(self, o: Self) -> M4 {
-            // SAFETY: M4 exists only inside avx code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx (module doc).
             M4(unsafe { _mm256_cmp_pd::<_CMP_NEQ_UQ>(self.0, o.0) })
         }
         #[inline(always)]
         fn select(m: M4, t: Self, f: Self) -> Self {
             // blendv(a, b, m): b where the mask lane's sign bit is set, else a
-            // SAFETY: F4 exists only inside avx/avx2 code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx and avx2 (module doc).
             F4(unsafe { _mm256_blendv_pd(f.0, t.0, m.0) })
         }
     }
 
     impl F4 {
         /// The 4 lanes from a slice's first 4 values (lane `l` is `a[l]`).
+        ///
+        /// # Safety
+        /// The CPU has avx and avx2.
         #[inline(always)]
-        pub fn load(a: &[f64]) -> F4 {
+        pub unsafe fn load(a: &[f64]) -> F4 {
             assert!(a.len() >= 4);
-            // SAFETY: an unaligned load of 32 bytes from at least 4 values; F4 exists only
-            // inside avx code (module doc).
-            F4(unsafe { _mm256_loadu_pd(a.as_ptr()) })
+            // an unaligned load of 32 bytes from at least 4 values
+            F4(_mm256_loadu_pd(a.as_ptr()))
+        }
+
+        /// The vector of a register.
+        ///
+        /// # Safety
+        /// The CPU has avx and avx2.
+        #[inline(always)]
+        pub unsafe fn from_raw(v: __m256d) -> F4 {
+            F4(v)
+        }
+
+        /// The register of the vector.
+        #[inline(always)]
+        pub fn raw(self) -> __m256d {
+            self.0
         }
 
         /// The 4 lanes into a slice's first 4 values.
         #[inline(always)]
         pub fn store(self, a: &mut [f64]) {
             assert!(a.len() >= 4);
-            // SAFETY: an unaligned store of 32 bytes into at least 4 values.
+            // SAFETY: an unaligned store of 32 bytes into at least 4 values; `self` exists,
+            // so the CPU has avx (module doc).
             unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
         }
     }
@@ -412,7 +459,7 @@ mod avx2 {
         /// One bit per lane (lane 0 lowest).
         #[inline(always)]
         pub fn bits(self) -> u8 {
-            // SAFETY: F4 exists only inside avx/avx2 code (module doc).
+            // SAFETY: `self` exists, so the CPU has avx and avx2 (module doc).
             (unsafe { _mm256_movemask_pd(self.0) }) as u8
         }
     }
@@ -471,6 +518,7 @@ mod tests {
             assert!(m(va.le(vb).or(va.ne(vb)), |x, y| x <= y || x != y));
             assert_eq!(va.ne(va).any(), a.iter().any(|x| x.is_nan()));
             let s = L::select(va.gt(vb), va, vb);
+            assert_eq!(bits(va.splat(-0.0)), vec![(-0.0f64).to_bits(); width]);
             assert_eq!(bits(s), each(|x, y| if x > y { x } else { y }));
         }
     }
@@ -489,7 +537,8 @@ mod tests {
         unsafe fn check() {
             check_lanes(
                 8,
-                |a| F8::load(a.try_into().unwrap()),
+                // SAFETY: avx512f detected by the caller
+                |a| unsafe { F8::load(a.try_into().unwrap()) },
                 |v| v.to_array().to_vec(),
                 |m| m.bits(),
             );
@@ -510,7 +559,8 @@ mod tests {
         unsafe fn check() {
             check_lanes(
                 4,
-                F4::load,
+                // SAFETY: avx2 detected by the caller
+                |a| unsafe { F4::load(a) },
                 |v| {
                     let mut a = [0.0; 4];
                     v.store(&mut a);

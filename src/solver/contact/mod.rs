@@ -46,10 +46,10 @@ pub(crate) fn dot<L: Lanes>(a: [L; 3], b: [L; 3]) -> L {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-/// The mask with no lane set.
+/// The mask of `like`'s type with no lane set.
 #[inline(always)]
-pub(crate) fn no_lanes<L: Lanes>() -> L::M {
-    let zero = L::splat(0.0);
+pub(crate) fn no_lanes<L: Lanes>(like: L) -> L::M {
+    let zero = like.splat(0.0);
     zero.ne(zero)
 }
 
@@ -122,9 +122,9 @@ impl<L: Lanes> ContactData<L> {
         v: ([L; 3], [L; 3]),
         omega: ([L; 3], [L; 3]),
     ) -> Self {
-        let zero = L::splat(0.0);
+        let zero = rsq.splat(0.0);
         let r = rsq.sqrt();
-        let rinv = L::splat(1.0) / r;
+        let rinv = rsq.splat(1.0) / r;
         ContactData {
             is_wall: false,
             radi,
@@ -148,6 +148,13 @@ impl<L: Lanes> ContactData<L> {
             cri: zero,
             crj: zero,
         }
+    }
+
+    /// A vector of `L` with `v` in every lane ([`Lanes::splat`], this contact's values the
+    /// proof that `L` runs here).
+    #[inline(always)]
+    pub fn splat(&self, v: f64) -> L {
+        self.radi.splat(v)
     }
 
     /// The effective radius every model reads (normal_model_hertz.h and the rolling
@@ -223,11 +230,11 @@ pub struct ForceData<L = f64> {
 }
 
 impl<L: Lanes> ForceData<L> {
-    /// Zero increments: each stage adds to them (`0 + x`, as LIGGGHTS adds into a zeroed
-    /// `ForceData`; kept because `0 + (-0) = +0`).
+    /// Zero increments of `like`'s type: each stage adds to them (`0 + x`, as LIGGGHTS adds
+    /// into a zeroed `ForceData`; kept because `0 + (-0) = +0`).
     #[inline(always)]
-    pub fn zero() -> Self {
-        let zero = L::splat(0.0);
+    pub fn zero(like: L) -> Self {
+        let zero = like.splat(0.0);
         ForceData {
             delta_f: [zero; 3],
             delta_torque: [zero; 3],
@@ -285,9 +292,9 @@ pub fn surfaces_intersect<L: Lanes>(
     hist: &mut ContactHistory<L>,
     update_history: bool,
 ) -> (ForceData<L>, ForceData<L>, ContactOutcome<L>) {
-    let zero = L::splat(0.0);
-    let mut fi = ForceData::zero();
-    let mut fj = ForceData::zero();
+    let zero = cd.splat(0.0);
+    let mut fi = ForceData::zero(zero);
+    let mut fj = ForceData::zero(zero);
     surface::default::surface(cd);
     let nf = normal::hertz::force(cd, p);
     normal::hertz::apply(cd, &nf, &mut fi, &mut fj);
@@ -302,7 +309,7 @@ pub fn surfaces_intersect<L: Lanes>(
     );
     let r = &mut hist.r_torque;
     let (r_torque, implicit_damping, rolling_mobilised) = match p.rolling {
-        RollingModel::Off => ([zero; 3], zero, no_lanes::<L>()),
+        RollingModel::Off => ([zero; 3], zero, no_lanes(zero)),
         RollingModel::Cdt => {
             let (m, mobilised) = rolling::cdt::torque(cd, &nf, p);
             (m, zero, mobilised)

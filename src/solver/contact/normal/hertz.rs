@@ -37,11 +37,11 @@ pub struct NormalForce<L = f64> {
 pub fn force<L: Lanes>(cd: &ContactData<L>, p: &PairParams) -> NormalForce<L> {
     let reff = cd.reff();
     let sqrtval = (reff * cd.deltan).sqrt();
-    let sn = L::splat(2.0 * p.y_eff) * sqrtval;
-    let st = L::splat(8.0 * p.g_eff) * sqrtval;
-    let kn = L::splat(4.0 / 3.0 * p.y_eff) * sqrtval;
+    let sn = cd.splat(2.0 * p.y_eff) * sqrtval;
+    let st = cd.splat(8.0 * p.g_eff) * sqrtval;
+    let kn = cd.splat(4.0 / 3.0 * p.y_eff) * sqrtval;
     let kt = st;
-    let gamma_c = L::splat(-2.0 * SQRT_FIVE_OVER_SIX * p.beta_eff);
+    let gamma_c = cd.splat(-2.0 * SQRT_FIVE_OVER_SIX * p.beta_eff);
     let undamped = p.beta_eff == 0.0;
     let gamman = if undamped {
         gamma_c
@@ -49,7 +49,7 @@ pub fn force<L: Lanes>(cd: &ContactData<L>, p: &PairParams) -> NormalForce<L> {
         gamma_c * (sn * cd.meff).sqrt()
     };
     let gammat = if !p.tangential_damping {
-        L::splat(0.0)
+        cd.splat(0.0)
     } else if undamped {
         gamma_c
     } else {

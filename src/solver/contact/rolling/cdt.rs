@@ -19,8 +19,8 @@ pub fn torque<L: Lanes>(
     nf: &NormalForce<L>,
     p: &PairParams,
 ) -> ([L; 3], L::M) {
-    let zero = L::splat(0.0);
-    let rmu = L::splat(p.coeff_roll_frict);
+    let zero = cd.splat(0.0);
+    let rmu = cd.splat(p.coeff_roll_frict);
     let reff = cd.reff();
     let w = relative_rotation(cd);
     let wmag = dot(w, w).sqrt();

@@ -18,7 +18,7 @@ pub fn torque<L: Lanes>(
     hist: &mut [L; 3],
     update_history: bool,
 ) -> ([L; 3], L::M) {
-    let kr = stiffness(nf.kn, L::splat(p.coeff_roll_frict), cd.reff());
+    let kr = stiffness(nf.kn, cd.splat(p.coeff_roll_frict), cd.reff());
     spring_dashpot(cd, nf, p, kr, hist, update_history)
 }
 
@@ -27,7 +27,7 @@ pub fn torque<L: Lanes>(
 /// stability estimate.
 #[inline(always)]
 pub fn stiffness<L: Lanes>(kn: L, mu_r: L, reff: L) -> L {
-    L::splat(2.25) * kn * mu_r * mu_r * reff * reff
+    kn.splat(2.25) * kn * mu_r * mu_r * reff * reff
 }
 
 #[cfg(test)]

@@ -18,9 +18,9 @@ pub fn torque<L: Lanes>(
     update_history: bool,
 ) -> ([L; 3], L::M) {
     let kr = stiffness(
-        L::splat(p.coeff_roll_stiffness),
+        cd.splat(p.coeff_roll_stiffness),
         nf.kn,
-        L::splat(p.coeff_roll_frict),
+        cd.splat(p.coeff_roll_frict),
         cd.reff(),
     );
     spring_dashpot(cd, nf, p, kr, hist, update_history)

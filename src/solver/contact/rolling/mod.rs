@@ -57,7 +57,7 @@ pub fn rolling_inertia<L: Lanes>(cd: &ContactData<L>, reff: L) -> L {
 /// Rolling inertia at a wall: `1.4 mi reff^2`, evaluated left to right.
 #[inline(always)]
 pub fn wall_rolling_inertia<L: Lanes>(mi: L, reff: L) -> L {
-    L::splat(1.4) * mi * reff * reff
+    mi.splat(1.4) * mi * reff * reff
 }
 
 /// Rolling inertia of a pair: `1.4 (mi radi^2)(mj radj^2) / (mi radi^2 + mj radj^2)`,
@@ -66,7 +66,7 @@ pub fn wall_rolling_inertia<L: Lanes>(mi: L, reff: L) -> L {
 pub fn pair_rolling_inertia<L: Lanes>(mi: L, radi: L, mj: L, radj: L) -> L {
     let a = mi * radi * radi;
     let b = mj * radj * radj;
-    L::splat(1.4) * a * b / (a + b)
+    mi.splat(1.4) * a * b / (a + b)
 }
 
 /// The part of `wr` the spring sees: all of it with `torsionTorque on`, else the part
@@ -96,8 +96,8 @@ pub fn spring<L: Lanes>(
     update_history: bool,
 ) -> ([L; 3], [L; 3], L::M) {
     let wr_tot = tangential_part(relative_rotation(cd), cd.en, p.torsion_torque);
-    let m_max = nf.fn_.abs() * cd.reff() * L::splat(p.coeff_roll_frict);
-    let s = L::splat(p.dt) * kr;
+    let m_max = nf.fn_.abs() * cd.reff() * cd.splat(p.coeff_roll_frict);
+    let s = cd.splat(p.dt) * kr;
     let mut m = [
         hist[0] + wr_tot[0] * s,
         hist[1] + wr_tot[1] * s,
@@ -122,10 +122,10 @@ pub fn spring<L: Lanes>(
 #[inline(always)]
 pub fn dashpot_coefficient<L: Lanes>(cd: &ContactData<L>, p: &PairParams, kr: L) -> L {
     if p.coeff_roll_visc == 0.0 {
-        L::splat(0.0)
+        cd.splat(0.0)
     } else {
         let r_inertia = rolling_inertia(cd, cd.reff());
-        L::splat(p.coeff_roll_visc * 2.0) * (r_inertia * kr).sqrt()
+        cd.splat(p.coeff_roll_visc * 2.0) * (r_inertia * kr).sqrt()
     }
 }
 

@@ -27,7 +27,7 @@ pub fn surface<L: Lanes>(cd: &mut ContactData<L>) {
     let deltan = cd.radsum - cd.r;
     let [dx, dy, dz] = cd.delta;
     let rinv = cd.rinv;
-    let half = L::splat(0.5);
+    let half = cd.splat(0.5);
     let (wr1, wr2, wr3);
     if cd.is_wall {
         let cr = cd.radi - half * cd.deltan;

@@ -28,10 +28,10 @@ pub fn force<L: Lanes>(
     fi: &mut ForceData<L>,
     fj: &mut ForceData<L>,
 ) -> [L; 3] {
-    let zero = L::splat(0.0);
+    let zero = cd.splat(0.0);
     let en = cd.en;
     if update_history {
-        let dt = L::splat(p.dt);
+        let dt = cd.splat(p.dt);
         for k in 0..3 {
             shear[k] = shear[k] + cd.vtr[k] * dt;
         }
@@ -44,7 +44,7 @@ pub fn force<L: Lanes>(
     let kt = nf.kt;
     let ft0 = [-(kt * shear[0]), -(kt * shear[1]), -(kt * shear[2])];
     let ft_shear = kt * shrmag;
-    let ft_friction = L::splat(p.coeff_frict) * nf.fn_.abs();
+    let ft_friction = cd.splat(p.coeff_frict) * nf.fn_.abs();
     let slide = ft_shear.gt(ft_friction);
     let nonzero = shrmag.ne(zero);
     let ft_slide = if slide.any() {
@@ -96,8 +96,8 @@ pub fn force<L: Lanes>(
 /// `|Ft|^2 >= (mu_p |Fn|)^2 (1 - 1e-9)`, at the Coulomb limit to round-off.
 #[inline(always)]
 pub fn sliding<L: Lanes>(ft: [L; 3], fn_: L, p: &PairParams) -> L::M {
-    let cap = L::splat(p.coeff_frict) * fn_.abs();
-    dot(ft, ft).ge(cap * cap * L::splat(1.0 - 1e-9))
+    let cap = fn_.splat(p.coeff_frict) * fn_.abs();
+    dot(ft, ft).ge(cap * cap * fn_.splat(1.0 - 1e-9))
 }
 
 #[cfg(test)]

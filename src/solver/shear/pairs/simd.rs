@@ -55,6 +55,9 @@ pub(super) trait Eval8 {
 
 /// 8 rows of 4 doubles (`a[l]`, lane `l`) as 4 vectors of 8 lanes (vector `c` holds
 /// element `c` of every row): 4 inserts, 4 unpacks and 4 two-source permutes.
+///
+/// # Safety
+/// The CPU has avx512f.
 #[inline(always)]
 unsafe fn transpose8x4(a: [__m256d; 8]) -> [F8; 4] {
     let z0 = _mm512_insertf64x4::<1>(_mm512_castpd256_pd512(a[0]), a[4]);
@@ -69,10 +72,10 @@ unsafe fn transpose8x4(a: [__m256d; 8]) -> [F8; 4] {
     let lo = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
     let hi = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
     [
-        F8(_mm512_permutex2var_pd(u0, lo, u2)),
-        F8(_mm512_permutex2var_pd(u1, lo, u3)),
-        F8(_mm512_permutex2var_pd(u0, hi, u2)),
-        F8(_mm512_permutex2var_pd(u1, hi, u3)),
+        F8::from_raw(_mm512_permutex2var_pd(u0, lo, u2)),
+        F8::from_raw(_mm512_permutex2var_pd(u1, lo, u3)),
+        F8::from_raw(_mm512_permutex2var_pd(u0, hi, u2)),
+        F8::from_raw(_mm512_permutex2var_pd(u1, hi, u3)),
     ]
 }
 
@@ -192,6 +195,9 @@ unsafe fn lane_inputs<L: Rows>(
 
 /// 4 rows of 4 doubles (`a[l]`, lane `l`) as 4 vectors of 4 lanes (vector `c` holds
 /// element `c` of every row): 4 unpacks and 4 lane permutes.
+///
+/// # Safety
+/// The CPU has avx.
 #[inline(always)]
 unsafe fn transpose4x4(a: [__m256d; 4]) -> [F4; 4] {
     // t0 = [a0.0 a1.0 a0.2 a1.2], t1 likewise with elements 1, 3
@@ -200,10 +206,10 @@ unsafe fn transpose4x4(a: [__m256d; 4]) -> [F4; 4] {
     let t2 = _mm256_unpacklo_pd(a[2], a[3]);
     let t3 = _mm256_unpackhi_pd(a[2], a[3]);
     [
-        F4(_mm256_permute2f128_pd::<0x20>(t0, t2)),
-        F4(_mm256_permute2f128_pd::<0x20>(t1, t3)),
-        F4(_mm256_permute2f128_pd::<0x31>(t0, t2)),
-        F4(_mm256_permute2f128_pd::<0x31>(t1, t3)),
+        F4::from_raw(_mm256_permute2f128_pd::<0x20>(t0, t2)),
+        F4::from_raw(_mm256_permute2f128_pd::<0x20>(t1, t3)),
+        F4::from_raw(_mm256_permute2f128_pd::<0x31>(t0, t2)),
+        F4::from_raw(_mm256_permute2f128_pd::<0x31>(t1, t3)),
     ]
 }
 
@@ -212,9 +218,19 @@ unsafe fn transpose4x4(a: [__m256d; 4]) -> [F4; 4] {
 /// permutes and 8 128-bit-block shuffles. A row is then one particle's increment
 /// ([`ForceData`]: force, torque) or one history ([`ContactHistory`]: shear, rolling
 /// torque), read whole by the write-back instead of 6 scalars from 6 lane arrays.
+///
+/// # Safety
+/// The CPU has avx512f (proven by `a` and `b`, kept `unsafe` for the raw intrinsics).
 #[inline(always)]
 unsafe fn rows6x8(a: [F8; 3], b: [F8; 3]) -> [[f64; 8]; 8] {
-    let v = [a[0].0, a[1].0, a[2].0, b[0].0, b[1].0, b[2].0];
+    let v = [
+        a[0].raw(),
+        a[1].raw(),
+        a[2].raw(),
+        b[0].raw(),
+        b[1].raw(),
+        b[2].raw(),
+    ];
     let z = _mm512_setzero_pd();
     // t0 = [v0.0 v1.0 v0.2 v1.2 v0.4 v1.4 v0.6 v1.6], t1 the odd elements; likewise
     // (v2, v3) and (v4, v5); (v6, v7) are zero
@@ -244,16 +260,19 @@ unsafe fn rows6x8(a: [F8; 3], b: [F8; 3]) -> [[f64; 8]; 8] {
     let lo = |k: usize| _mm512_shuffle_f64x2::<0b01_00_01_00>(u[k], u[k + 4]);
     let hi = |k: usize| _mm512_shuffle_f64x2::<0b11_10_11_10>(u[k], u[k + 4]);
     let rows = [lo(0), lo(1), lo(2), lo(3), hi(0), hi(1), hi(2), hi(3)];
-    rows.map(|r| F8(r).to_array())
+    rows.map(|r| F8::from_raw(r).to_array())
 }
 
 /// [`rows6x8`] for 4 lanes: rows `[a0 a1 a2 b0 b1 b2 0 0]` into `dst` (4 rows), two 4x4
 /// transposes.
+///
+/// # Safety
+/// The CPU has avx (proven by `a` and `b`, kept `unsafe` for the raw intrinsics).
 #[inline(always)]
 unsafe fn rows6x4(dst: &mut [[f64; 8]], a: [F4; 3], b: [F4; 3]) {
     let z = _mm256_setzero_pd();
-    let front = transpose4x4([a[0].0, a[1].0, a[2].0, b[0].0]);
-    let back = transpose4x4([b[1].0, b[2].0, z, z]);
+    let front = transpose4x4([a[0].raw(), a[1].raw(), a[2].raw(), b[0].raw()]);
+    let back = transpose4x4([b[1].raw(), b[2].raw(), z, z]);
     for (l, row) in dst.iter_mut().enumerate().take(4) {
         front[l].store(&mut row[..4]);
         back[l].store(&mut row[4..]);
@@ -391,6 +410,10 @@ entry!(chunk_avx2, "avx,avx2", Avx2);
 /// within a few hundred particles of it in any order, and at 250,000 particles
 /// (records and sums about 36 MB, beyond L3) perf put a third of the pass on the first
 /// touch of `j`'s sum. Prefetches only: no value changes.
+///
+/// # Safety
+/// Every pair's `j` is in bounds of `s.packed` and of the allocation `sums` points into (a
+/// prefetch does not fault, but the addresses are formed with `add`).
 #[inline(always)]
 unsafe fn prefetch_records(pairs: &[Pair], s: Particles, sums: *const ForceData) {
     use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
