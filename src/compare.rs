@@ -571,6 +571,16 @@ mod shear_tests {
         lockstep(&a, &a, &["top_g"], 1e-6);
     }
 
+    /// One seed's CI comes from 10 block means: a series of 10 blocks of constant values 1..10
+    /// has the blocks' mean CI, t(9) 2.262157 sd(1..10) / sqrt 10 (a cargo-mutants survivor:
+    /// any constant passed).
+    #[test]
+    fn block_ci_is_the_ci_of_ten_block_means() {
+        let v: Vec<f64> = (0..100).map(|k| (k / 10 + 1) as f64).collect();
+        let sd = (110.0f64 / 12.0).sqrt();
+        assert!((block_ci95(&v) - 2.262157 * sd / 10f64.sqrt()).abs() < 1e-5);
+    }
+
     /// The steady window is the second half of the stage, wherever the stage starts.
     #[test]
     fn steady_window_is_the_second_half_of_the_stage() {
@@ -811,6 +821,8 @@ mod equivalence_tests {
         assert!(e.mean.abs() < 1e-15);
         assert!((e.sd - 0.05).abs() < 1e-12);
         assert!((e.ci90 - 2.919986 * 0.05 / 3f64.sqrt()).abs() < 1e-6);
+        // the 95 % half-width DISAGREE is judged with: t(2) 4.302653 (a cargo-mutants survivor)
+        assert!((e.ci95 - 4.302653 * 0.05 / 3f64.sqrt()).abs() < 1e-6);
         assert_eq!(e.outcome, Outcome::Inconclusive);
         // t(n-1) 0.05 / sqrt n < 0.03 first at n = 10 (1.833 * 0.05 / 3.162 = 0.0290;
         // n = 9: 1.860 * 0.05 / 3 = 0.0310)

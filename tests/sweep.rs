@@ -235,6 +235,10 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
     assert!(out
         .join("runs/mur1_etar0.5_s1/seed1/rotation_map.svg")
         .is_file());
+    // each run's own figures, drawn as it finished (from its folder, by the command)
+    for f in ["mu_strain.svg", "velocity_profile.svg"] {
+        assert!(out.join("runs/mur1_etar0.5_s1").join(f).is_file(), "{f}");
+    }
     let keep = Path::new(env!("CARGO_TARGET_TMPDIR")).join("sweep-test");
     let _ = std::fs::remove_dir_all(&keep);
     std::fs::create_dir_all(&keep).unwrap();

@@ -185,6 +185,7 @@ impl ShearArgs {
 pub fn shear(a: ShearArgs) -> Result<Verdict> {
     let req = a.request(a.engine(), &format!("shear-{}", a.preset.keyword()));
     let summary = run(&req)?;
+    crate::report::shear::figures(&req.out, &summary)?;
     print_summary(&summary, &req.out);
     Ok(summary.verdict())
 }

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::report::sweep::report;
 use crate::run::sweep::{
-    collect_dir, plan, run_one, run_pending, slurm_script, Manifest, RunResult, SweepBase,
+    collect_dir, plan, run_dir, run_one, run_pending, slurm_script, Manifest, RunResult, SweepBase,
     SweepRequest,
 };
 use crate::run::Verdict;
@@ -124,6 +124,9 @@ pub fn sweep(a: SweepArgs) -> Result<Verdict> {
             crate::run::check_threads("--threads", threads)?;
             let t = Instant::now();
             let (res, ran) = run_one(&m, dir, index, threads)?;
+            if ran {
+                crate::report::shear::figures_from_dir(&run_dir(dir, m.run(index)?))?;
+            }
             println!(
                 "run {index} ({}): {} in {:.1} s; {}",
                 res.run.id,
@@ -244,7 +247,14 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
     );
     let o = run_pending(&req, &m, &|r, res| {
         match res {
-            Ok(res) => bar.println(format!("  {}: {}", res.run.id, stage_line(res))),
+            Ok(res) => {
+                bar.println(format!("  {}: {}", res.run.id, stage_line(res)));
+                // the run's own figures, drawn as it finishes (a failure to draw keeps its
+                // result and is said)
+                if let Err(e) = crate::report::shear::figures_from_dir(&run_dir(&req.out, r)) {
+                    bar.println(format!("  {}: figures not drawn: {e}", r.id));
+                }
+            }
             Err(msg) => bar.println(format!("  FAILED {msg}")),
         }
         bar.inc(1);

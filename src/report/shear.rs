@@ -1,11 +1,43 @@
 //! The shear study's figures: mu(strain), plate forces, mobilisation, height and rotational
 //! energy, each seed faint with its running mean on top, one legend entry per code.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::profile::VelocityProfile;
 use crate::report::plot::{decimate, line_plot, running_mean, Curve, CurveData};
+use crate::run::shear::ShearSummary;
 use crate::series::Series;
 use std::path::Path;
+
+/// Every figure of a finished study into `out`, from its outcome: the series' plots
+/// ([`plots`]) and the steady velocity profiles ([`profile_plot`]).
+pub fn figures(out: &Path, s: &ShearSummary) -> Result<()> {
+    plots(out, &s.series.liggghts, &s.series.native)?;
+    profile_plot(out, &s.profiles.liggghts, &s.profiles.native)
+}
+
+/// [`figures`] of a finished study from its folder: `summary.json` and the series each seed
+/// folder holds (`seedN/{liggghts,native}.csv`, of the codes the summary says ran). A sweep
+/// draws each run's figures so as it finishes.
+pub fn figures_from_dir(out: &Path) -> Result<()> {
+    let path = out.join("summary.json");
+    let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
+    let mut s: ShearSummary = serde_json::from_slice(&bytes)
+        .map_err(|e| Error::invalid("summary.json", path.display(), e.to_string()))?;
+    for (code, ran, into) in [
+        ("liggghts", s.liggghts.is_some(), &mut s.series.liggghts),
+        ("native", s.native.is_some(), &mut s.series.native),
+    ] {
+        if ran {
+            for seed in &s.seeds {
+                let csv = out
+                    .join(format!("seed{}", seed.seed))
+                    .join(format!("{code}.csv"));
+                into.push(Series::read_csv(&csv)?);
+            }
+        }
+    }
+    figures(out, &s)
+}
 
 /// Points per curve in the shear plots.
 const PLOT_POINTS: usize = 1500;

@@ -311,6 +311,7 @@ fn shear_night(
     };
     println!("\n== shear {} ==", row.name);
     match super::shear::run(&args).and_then(|s| {
+        crate::report::shear::figures(&args.out, &s)?;
         super::shear::print_summary(&s, &args.out);
         fill_shear_row(&mut row, &s)
     }) {

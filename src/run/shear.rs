@@ -812,8 +812,6 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
             });
         }
     }
-    crate::report::shear::plots(&out, &lig_series, &nat_series)?;
-    crate::report::shear::profile_plot(&out, &profiles.liggghts, &profiles.native)?;
     let summary = ShearSummary {
         schema: super::SCHEMA,
         pass: results.iter().all(|r| r.pass) && !results.is_empty(),
