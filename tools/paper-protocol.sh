@@ -23,14 +23,14 @@ if [ ! -x "$bin" ]; then
     "$(hostname)" "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)" >> PROVENANCE
 fi
 cp -n "$repo"/studies/paper-protocol-*.toml studies/
-# epsd (the paper's model, the decisive runs) runs at normal priority, epsd_implicit on what is
-# left (nice 19): development on the second core slows only the latter
+# Both at normal priority since epsd's (1, 0.5) finished (2026-12-05): epsd_implicit's (1, 0.5)
+# is the other half of the decisive pair (until then it ran at nice 19 on what was left)
 for s in epsd implicit; do
   if [ -f "pid-$s" ] && kill -0 "$(cat "pid-$s")" 2>/dev/null; then
     echo "$s: running (pid $(cat "pid-$s"))"
     continue
   fi
-  n=19; [ "$s" = epsd ] && n=0
+  n=0
   echo "$(date -u +%FT%TZ) start $s (nice $n, $bin)" >> runs.log
   nohup nice -n "$n" "$bin" run "studies/paper-protocol-$s.toml" >> "log-$s.txt" 2>&1 &
   echo $! > "pid-$s"

@@ -389,6 +389,18 @@ pub(crate) mod test_support {
         PairParams::new(&material(), &models, 1e-8)
     }
 
+    /// The sphere i of [`pair`] touching a wall below it instead, with the overlap
+    /// `overlap` the mesh code stores (r = radi - overlap); i spins at `omega_i`.
+    pub fn wall(omega_i: V3, overlap: f64) -> ContactData {
+        let mut cd = pair(omega_i);
+        cd.is_wall = true;
+        cd.radsum = cd.radi;
+        cd.deltan = overlap;
+        cd.r = cd.radi - overlap;
+        cd.rinv = 1.0 / cd.r;
+        cd
+    }
+
     /// Two spheres of radius 1 mm along z with overlap 1 um, i on top; i spins about y.
     pub fn pair(omega_i: V3) -> ContactData {
         let (ri, rj) = (1e-3, 1e-3);

@@ -49,7 +49,7 @@ pub fn torque<L: Lanes>(
 mod tests {
     use super::super::super::normal::hertz;
     use super::super::super::surface::default::surface;
-    use super::super::super::test_support::{pair, params};
+    use super::super::super::test_support::{pair, params, wall};
     use super::*;
     use crate::spec::RollingModel;
     use approx::assert_relative_eq;
@@ -79,12 +79,7 @@ mod tests {
     fn wall_moment_along_every_component_with_torsion() {
         let mut p = params(RollingModel::Cdt);
         p.torsion_torque = true;
-        let mut cd = pair([30.0, -40.0, 120.0]);
-        cd.is_wall = true;
-        cd.radsum = cd.radi;
-        cd.deltan = 1e-6;
-        cd.r = cd.radi - cd.deltan;
-        cd.rinv = 1.0 / cd.r;
+        let mut cd = wall([30.0, -40.0, 120.0], 1e-6);
         surface(&mut cd);
         let nf = hertz::force(&cd, &p);
         let (m, mobilised) = torque(&cd, &nf, &p);

@@ -34,7 +34,7 @@ pub fn stiffness<L: Lanes>(kn: L, mu_r: L, reff: L) -> L {
 mod tests {
     use super::super::super::normal::hertz;
     use super::super::super::surface::default::surface;
-    use super::super::super::test_support::{pair, params};
+    use super::super::super::test_support::{pair, params, wall};
     use super::*;
     use crate::spec::RollingModel;
     use approx::assert_relative_eq;
@@ -67,12 +67,7 @@ mod tests {
     #[test]
     fn wall_dashpot_uses_the_wall_rolling_inertia() {
         let p = params(RollingModel::Epsd);
-        let mut cd = pair([0.0, 100.0, 0.0]);
-        cd.is_wall = true;
-        cd.radsum = cd.radi;
-        cd.deltan = 1e-6;
-        cd.r = cd.radi - cd.deltan;
-        cd.rinv = 1.0 / cd.r;
+        let mut cd = wall([0.0, 100.0, 0.0], 1e-6);
         surface(&mut cd);
         let nf = hertz::force(&cd, &p);
         let reff = cd.radi;

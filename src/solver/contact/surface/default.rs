@@ -56,7 +56,7 @@ pub fn surface<L: Lanes>(cd: &mut ContactData<L>) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::super::test_support::pair;
+    use super::super::super::test_support::{pair, wall};
     use super::*;
     use approx::assert_relative_eq;
 
@@ -77,12 +77,7 @@ mod tests {
 
     #[test]
     fn wall_uses_the_overlap_stored_by_the_mesh_code() {
-        let mut cd = pair([0.0, 50.0, 0.0]);
-        cd.is_wall = true;
-        cd.radsum = cd.radi;
-        cd.deltan = 2e-6;
-        cd.r = cd.radi - cd.deltan;
-        cd.rinv = 1.0 / cd.r;
+        let mut cd = wall([0.0, 50.0, 0.0], 2e-6);
         surface(&mut cd);
         assert_eq!(cd.cri, 1e-3 - 1e-6);
         assert_relative_eq!(
