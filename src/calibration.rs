@@ -365,6 +365,35 @@ pub fn describe(e: &crate::compare::Equivalence, preset: Preset) -> Vec<String> 
 mod tests {
     use super::*;
 
+    /// A stored file whose set has fewer than 2 seeds, or an `a` or `b` of another length
+    /// than its seeds, is refused naming the set (a cargo-mutants survivor: `&&` for `||`
+    /// let any one of them through).
+    #[test]
+    fn stored_sets_need_two_seeds_and_one_value_per_seed() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = |seeds: &str, a: &str, b: &str| {
+            let p = dir.path().join("set.json");
+            std::fs::write(
+                &p,
+                format!(
+                    r#"{{"preset": "ci", "provenance": "test", "sets": [{{"label": "x",
+                    "equal": true, "seeds": {seeds}, "a": {a}, "b": {b}}}]}}"#
+                ),
+            )
+            .unwrap();
+            Stored::read(&p)
+        };
+        assert!(file("[1, 2]", "[0.5, 0.5]", "[0.5, 0.6]").is_ok());
+        for (seeds, a, b) in [
+            ("[1]", "[0.5]", "[0.5]"),
+            ("[1, 2]", "[0.5]", "[0.5, 0.6]"),
+            ("[1, 2]", "[0.5, 0.5]", "[0.5, 0.6, 0.7]"),
+        ] {
+            let e = file(seeds, a, b).unwrap_err().to_string();
+            assert!(e.contains("set `x` needs >= 2 seeds"), "{e}");
+        }
+    }
+
     #[test]
     fn the_printed_verdict_cites_the_rates_that_apply() {
         // inconclusive at 3 ci seeds: the figures, the seeds that would decide, the 3-seed rates

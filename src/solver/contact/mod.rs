@@ -346,7 +346,19 @@ pub fn surfaces_intersect<L: Lanes>(
 
 #[cfg(test)]
 mod history_tests {
-    use super::ContactHistory;
+    use super::{moved_beyond_half_skin, ContactHistory};
+
+    /// An atom triggers a rebuild once it moved strictly more than skin/2 since the last
+    /// build, in any direction (a cargo-mutants survivor: no test held the check).
+    #[test]
+    fn rebuild_when_an_atom_moved_beyond_half_the_skin() {
+        let hold = [1.0, 2.0, 3.0];
+        assert!(!moved_beyond_half_skin(hold, hold, 0.1));
+        assert!(!moved_beyond_half_skin([1.0499, 2.0, 3.0], hold, 0.1));
+        assert!(moved_beyond_half_skin([1.0, 2.0, 3.0 - 0.0501], hold, 0.1));
+        assert!(moved_beyond_half_skin([1.03, 2.03, 3.03], hold, 0.1));
+        assert!(!moved_beyond_half_skin([1.02, 2.02, 3.02], hold, 0.1));
+    }
 
     /// Only the all-+0.0 history counts as zero: a -0.0 component is a bit set.
     #[test]
