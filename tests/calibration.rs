@@ -30,6 +30,9 @@ fn the_docs_table_and_the_cited_rates_are_what_the_stored_sets_give() {
         );
         let rows = table(&s, MU_MARGIN);
         let md = markdown(&rows);
+        // a header, its rule and one line per row (an empty table is contained in any text:
+        // a cargo-mutants survivor)
+        assert_eq!(md.lines().count(), 2 + rows.len(), "{md}");
         assert!(
             docs.contains(&md),
             "docs/verdicts.md lacks the {name} table recomputed from the stored sets:\n{md}"
