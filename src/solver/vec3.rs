@@ -8,11 +8,14 @@
 //! is mirrored (the implicit dashpot's 3x3 solve, `solver::shear::implicit`). Nothing here
 //! allocates.
 
+use super::contact::lanes::Lanes;
+
 pub type V3 = [f64; 3];
 
-/// `vectorDot3D`: `a0*b0 + a1*b1 + a2*b2`.
-#[inline]
-pub fn dot(a: V3, b: V3) -> f64 {
+/// `vectorDot3D`: `a0*b0 + a1*b1 + a2*b2`, for one vector or per lane of SIMD vectors
+/// ([`Lanes`]: the contact kernels use it over lanes).
+#[inline(always)]
+pub fn dot<L: Lanes>(a: [L; 3], b: [L; 3]) -> L {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 

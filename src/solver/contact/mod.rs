@@ -36,15 +36,9 @@ pub mod surface;
 pub mod tangential;
 
 use super::material::PairParams;
-use super::vec3::V3;
+use super::vec3::{dot, V3};
 use crate::spec::RollingModel;
 use lanes::{Lanes, Mask};
-
-/// `a . b` as vector_liggghts.h: `a0 b0 + a1 b1 + a2 b2`, left to right.
-#[inline(always)]
-pub(crate) fn dot<L: Lanes>(a: [L; 3], b: [L; 3]) -> L {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 /// The mask of `like`'s type with no lane set.
 #[inline(always)]

@@ -2,9 +2,10 @@
 
 use super::super::lanes::{select3, Lanes, Mask};
 use super::super::normal::NormalForce;
-use super::super::{dot, ContactData};
+use super::super::ContactData;
 use super::relative_rotation;
 use crate::solver::material::PairParams;
+use crate::solver::vec3::dot;
 
 /// `M = mu_r kn deltan reff w/|w|` opposing the relative rotation `w` (no history, no
 /// spring: full mobilisation as soon as `w != 0`). The normal force used is the elastic

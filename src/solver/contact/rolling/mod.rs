@@ -13,8 +13,9 @@ pub mod epsd_implicit;
 
 use super::lanes::{select3, Lanes, Mask};
 use super::normal::NormalForce;
-use super::{dot, ContactData, ForceData};
+use super::{ContactData, ForceData};
 use crate::solver::material::PairParams;
+use crate::solver::vec3::dot;
 
 pub use super::pair_reff;
 

@@ -3,8 +3,9 @@
 
 use super::super::lanes::{select3, Lanes, Mask};
 use super::super::normal::NormalForce;
-use super::super::{dot, ContactData, ForceData};
+use super::super::{ContactData, ForceData};
 use crate::solver::material::PairParams;
+use crate::solver::vec3::dot;
 
 /// Incremental tangential spring with Coulomb limit. LIGGGHTS' algorithm, in its order:
 /// 1. if updating: `shear += vtr dt`, then project onto the tangent plane:
