@@ -1,6 +1,7 @@
 //! The layering of src/: the library never imports a command module (src/cli/), and the
-//! file-level import graph has no circle. Paths are read from the source text (`crate::a::b`,
-//! `super::x`, and the items of `use` groups), each resolved to the file that defines it.
+//! file-level import graph has no circle. Paths are read from the parsed source (`crate::a::b`,
+//! `super::x` relative to the inline module it stands in, the items of `use` trees, and paths
+//! inside macro arguments), each resolved to the file that defines it.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -33,63 +34,138 @@ fn resolve(modules: &BTreeMap<Vec<String>, PathBuf>, path: &[String]) -> Option<
         .find_map(|n| modules.get(&path[..n]).cloned())
 }
 
-/// Every module path the text refers to, absolute (from the crate root).
-fn references(text: &str, me: &[String]) -> Vec<Vec<String>> {
-    // `super::` is the parent of the file's module (for a mod.rs too: its module is the
-    // directory's)
-    let parent: Vec<String> = me[..me.len().saturating_sub(1)].to_vec();
-    let mut refs = Vec::new();
-    let code: String = text
-        .lines()
-        .filter(|l| !l.trim_start().starts_with("//"))
-        .collect::<Vec<_>>()
-        .join("\n");
-    let bytes = code.as_bytes();
-    for (root, base) in [("crate::", Vec::new()), ("super::", parent)] {
-        let mut from = 0;
-        while let Some(k) = code[from..].find(root) {
-            let start = from + k;
-            from = start + root.len();
-            // not part of a longer identifier (e.g. `dem_crate::`)
-            if start > 0 && (bytes[start - 1].is_ascii_alphanumeric() || bytes[start - 1] == b'_') {
-                continue;
+/// Every module path a file refers to, absolute (from the crate root): `use` trees and paths
+/// that start with `crate`, `super` or `self`, read with `syn` so that `super` inside an inline
+/// module (`mod tests`, `mod avx2`) means that module's parent, not the file's.
+struct References {
+    /// module path at the current point: the file's module, then the inline modules around it
+    here: Vec<String>,
+    out: Vec<Vec<String>>,
+}
+
+impl References {
+    /// `segs` made absolute, if it starts at `crate`, `super` or `self`; else None (an
+    /// external crate, a prelude name or a local item).
+    fn absolute(&self, segs: &[String]) -> Option<Vec<String>> {
+        let mut base = match segs.first().map(String::as_str) {
+            Some("crate") => Vec::new(),
+            Some("super" | "self") => self.here.clone(),
+            _ => return None,
+        };
+        let mut rest = if segs[0] == "crate" { &segs[1..] } else { segs };
+        while let Some(s) = rest.first() {
+            match s.as_str() {
+                "super" => {
+                    base.pop()?;
+                }
+                "self" => {}
+                _ => break,
             }
-            let rest = &code[from..];
-            let mut segs = base.clone();
-            let mut i = 0;
-            let rb = rest.as_bytes();
-            loop {
-                let s = i;
-                while i < rb.len() && (rb[i].is_ascii_alphanumeric() || rb[i] == b'_') {
-                    i += 1;
-                }
-                if i == s {
-                    break;
-                }
-                segs.push(rest[s..i].to_string());
-                if rest[i..].starts_with("::") {
-                    i += 2;
-                } else {
-                    break;
+            rest = &rest[1..];
+        }
+        base.extend(rest.iter().cloned());
+        Some(base)
+    }
+
+    fn use_tree(&mut self, prefix: &mut Vec<String>, tree: &syn::UseTree) {
+        match tree {
+            syn::UseTree::Path(p) => {
+                prefix.push(p.ident.to_string());
+                self.use_tree(prefix, &p.tree);
+                prefix.pop();
+            }
+            syn::UseTree::Name(n) => {
+                prefix.push(n.ident.to_string());
+                self.record(prefix);
+                prefix.pop();
+            }
+            syn::UseTree::Rename(r) => {
+                prefix.push(r.ident.to_string());
+                self.record(prefix);
+                prefix.pop();
+            }
+            syn::UseTree::Glob(_) => self.record(prefix),
+            syn::UseTree::Group(g) => {
+                for t in &g.items {
+                    self.use_tree(prefix, t);
                 }
             }
-            // `use crate::a::{b, c::d}`: each item of the group
-            if rest[i..].starts_with('{') {
-                let end = rest[i..].find('}').map(|e| i + e).unwrap_or(rest.len());
-                for item in rest[i + 1..end].split(',') {
-                    let mut p = segs.clone();
-                    p.extend(
-                        item.split("::")
-                            .map(|s| s.trim().trim_start_matches('{').trim().to_string())
-                            .filter(|s| !s.is_empty() && s != "self" && s != "*"),
-                    );
-                    refs.push(p);
-                }
-            }
-            refs.push(segs);
         }
     }
-    refs
+
+    fn record(&mut self, segs: &[String]) {
+        if let Some(a) = self.absolute(segs) {
+            self.out.push(a);
+        }
+    }
+}
+
+impl<'ast> syn::visit::Visit<'ast> for References {
+    fn visit_item_mod(&mut self, m: &'ast syn::ItemMod) {
+        self.here.push(m.ident.to_string());
+        syn::visit::visit_item_mod(self, m);
+        self.here.pop();
+    }
+
+    fn visit_item_use(&mut self, u: &'ast syn::ItemUse) {
+        self.use_tree(&mut Vec::new(), &u.tree);
+    }
+
+    fn visit_path(&mut self, p: &'ast syn::Path) {
+        let segs: Vec<String> = p.segments.iter().map(|s| s.ident.to_string()).collect();
+        self.record(&segs);
+        syn::visit::visit_path(self, p);
+    }
+
+    /// A macro's arguments are tokens, not syntax: `crate::a::b` / `super::x` runs in them.
+    fn visit_macro(&mut self, m: &'ast syn::Macro) {
+        self.tokens(m.tokens.clone());
+        syn::visit::visit_macro(self, m);
+    }
+}
+
+impl References {
+    fn tokens(&mut self, ts: proc_macro2::TokenStream) {
+        let tt: Vec<proc_macro2::TokenTree> = ts.into_iter().collect();
+        let mut i = 0;
+        while i < tt.len() {
+            match &tt[i] {
+                proc_macro2::TokenTree::Group(g) => self.tokens(g.stream()),
+                proc_macro2::TokenTree::Ident(id) if id == "crate" || id == "super" => {
+                    // ident (`::` ident)*, where `::` is two ':' puncts
+                    let mut segs = vec![id.to_string()];
+                    let mut j = i + 1;
+                    while let (
+                        Some(proc_macro2::TokenTree::Punct(a)),
+                        Some(proc_macro2::TokenTree::Punct(b)),
+                        Some(proc_macro2::TokenTree::Ident(n)),
+                    ) = (tt.get(j), tt.get(j + 1), tt.get(j + 2))
+                    {
+                        if a.as_char() != ':' || b.as_char() != ':' {
+                            break;
+                        }
+                        segs.push(n.to_string());
+                        j += 3;
+                    }
+                    self.record(&segs);
+                    i = j;
+                    continue;
+                }
+                _ => {}
+            }
+            i += 1;
+        }
+    }
+}
+
+fn references(text: &str, me: &[String]) -> Vec<Vec<String>> {
+    let file = syn::parse_file(text).unwrap_or_else(|e| panic!("{me:?} does not parse: {e}"));
+    let mut r = References {
+        here: me.to_vec(),
+        out: Vec::new(),
+    };
+    syn::visit::Visit::visit_file(&mut r, &file);
+    r.out
 }
 
 #[test]
