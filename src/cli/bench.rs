@@ -1,6 +1,6 @@
 //! `verify bench`: flags -> [`BenchRequest`] -> [`crate::run::bench`].
 
-use crate::cli::{LiggghtsArgs, PresetArg};
+use crate::cli::args::{LiggghtsArgs, PresetArg};
 use crate::error::Result;
 use crate::run::bench::{run, BenchRequest};
 use crate::run::{out_or_default, Verdict, SHEAR_TIMEOUT_S};

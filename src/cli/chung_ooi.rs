@@ -1,7 +1,7 @@
 //! `verify chung-ooi`: the Chung & Ooi (2011) benchmark ([`crate::chung_ooi`]) in both codes
 //! -> [`crate::run::chung_ooi`] -> a line per figure and code, and the verdict.
 
-use crate::cli::LiggghtsArgs;
+use crate::cli::args::LiggghtsArgs;
 use crate::error::Result;
 use crate::run::chung_ooi::{run_all, select};
 use crate::run::{out_or_default, Verdict, CONTACT_TIMEOUT_S};

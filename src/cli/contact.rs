@@ -2,7 +2,7 @@
 //! [`crate::run::contact`] (live LIGGGHTS or the stored reference) -> a line per run and the
 //! worst-channel table.
 
-use crate::cli::LiggghtsArgs;
+use crate::cli::args::LiggghtsArgs;
 use crate::compare::CONTACT_RTOL;
 use crate::deck::run_name;
 use crate::error::{Error, Result};

@@ -1,8 +1,8 @@
 //! `verify convergence`: flags -> [`ConvergenceRequest`] -> [`crate::run::convergence`].
 //! The same shear case from the same compacted state at successively smaller time steps.
 
+use crate::cli::args::EngineArg;
 use crate::cli::shear::ShearArgs;
-use crate::cli::EngineArg;
 use crate::error::{Error, Result};
 use crate::run::convergence::{run, ConvergenceRequest};
 use crate::run::Verdict;

@@ -1,7 +1,7 @@
 //! `verify nightly`: flags -> [`NightlyRequest`] -> [`crate::run::nightly`]: every contact case
 //! and the nightly shear points in both codes, report.html, summary.json, history.
 
-use crate::cli::LiggghtsArgs;
+use crate::cli::args::LiggghtsArgs;
 use crate::error::Result;
 use crate::run::nightly::{rerender, run, NightlyRequest};
 use crate::run::{Verdict, SHEAR_TIMEOUT_S};

@@ -1,7 +1,7 @@
 //! `verify replay`: flags -> [`ReplayRequest`] -> table, exit status. Thin: the work is in
 //! [`crate::run::replay`].
 
-use crate::cli::LiggghtsArgs;
+use crate::cli::args::LiggghtsArgs;
 use crate::error::{Error, Result};
 use crate::report::replay::{plot, table};
 use crate::run::replay::{default_states, run, ReplayRequest, REPLAY_TIMEOUT_S};

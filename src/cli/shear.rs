@@ -1,7 +1,7 @@
 //! `verify shear`: flags -> [`ShearRequest`] -> the shear study ([`crate::run::shear`]) ->
 //! printed figures, exit status.
 
-use crate::cli::{LiggghtsArgs, PresetArg, RollingArg};
+use crate::cli::args::{LiggghtsArgs, PresetArg, RollingArg};
 use crate::compare::{MU_MARGIN, STRESS_RTOL};
 use crate::error::Result;
 use crate::run::shear::{print_summary, run, ShearRequest};

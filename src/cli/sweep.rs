@@ -2,8 +2,8 @@
 //! (resumable), or emits a SLURM job array that calls `verify sweep run-one` per entry;
 //! `collect` gathers results, `report` draws the paper's figures and checks its conclusions.
 
+use crate::cli::args::{EngineArg, PresetArg, RollingArg};
 use crate::cli::shear::ProtocolArgs;
-use crate::cli::{EngineArg, PresetArg, RollingArg};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::report::sweep::report;
