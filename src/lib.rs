@@ -23,5 +23,6 @@ pub mod series;
 pub mod shear;
 pub mod solver;
 pub mod spec;
+pub mod vtk;
 
 pub use error::{Error, Result};

@@ -9,12 +9,12 @@ use crate::fsutil::{sha256_hex, write_atomic};
 use crate::liggghts::{dump_atoms, last_thermo_step, parse_err, read_thermo, Liggghts, LOG_NAME};
 use crate::packing::Packing;
 use crate::profile::{is_sample, profiles, schedule, ProfileSample, VelocityProfile};
-use crate::report::vtk;
 use crate::run::progress::Progress;
 use crate::series::Series;
 use crate::solver::shear::plate::{plate_triangles, Plate, Side};
 use crate::solver::shear::{PlateRecord, ShearSim};
 use crate::spec::shear::ShearCase;
+use crate::vtk;
 use std::path::Path;
 use std::time::Instant;
 

@@ -12,7 +12,6 @@ pub mod replay;
 pub mod rotation;
 pub mod shear;
 pub mod sweep;
-pub mod vtk;
 
 use crate::compare::ChannelResult;
 
