@@ -1,8 +1,10 @@
-//! `verify nightly`: flags -> [`NightlyRequest`] -> [`crate::run::nightly`]: every contact case
-//! and the nightly shear points in both codes, report.html, summary.json, history.
+//! `verify nightly`: flags -> [`NightlyRequest`] -> [`crate::run::nightly`] (every contact case
+//! and the nightly shear points in both codes, summary.json, history, the runs' figures as they
+//! finish) -> report.html ([`write_page`]).
 
 use crate::cli::args::LiggghtsArgs;
 use crate::error::Result;
+use crate::report::nightly::{write_page, NightFigures};
 use crate::run::nightly::{rerender, run, NightlyRequest};
 use crate::run::{Verdict, SHEAR_TIMEOUT_S};
 use clap::Args;
@@ -34,8 +36,10 @@ pub fn nightly(a: NightlyArgs) -> Result<Verdict> {
         history: a.history,
         liggghts: a.liggghts.request(SHEAR_TIMEOUT_S),
     };
-    if a.rerender {
-        return Ok(rerender(&req)?.verdict());
-    }
-    Ok(run(&req)?.verdict())
+    let night = if a.rerender {
+        rerender(&req)?
+    } else {
+        run(&req, &NightFigures)?
+    };
+    Ok(write_page(night, &req.out)?.verdict())
 }

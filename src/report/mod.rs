@@ -3,7 +3,6 @@
 pub mod bars;
 pub mod contact;
 pub mod convergence;
-pub mod history;
 pub mod html;
 pub mod nightly;
 pub mod paper;

@@ -5,9 +5,9 @@ use crate::compare::CONTACT_RTOL;
 use crate::error::Result;
 use crate::fsutil::write_atomic;
 use crate::report::bars::{bar_chart, Bar, BarGroup};
-use crate::report::history::Record;
 use crate::report::html::{table, text, text_rows, Cell, Page};
 use crate::report::plot::{line_plot, log_error_plot, Curve, CurveData};
+use crate::run::history::Record;
 use crate::run::nightly_outcome::{CodeStats, NightlySummary, ShearRow};
 use maud::{html, Markup};
 use std::path::Path;
@@ -68,6 +68,50 @@ fn mu_measured(r: &ShearRow) -> String {
             }
         ),
     }
+}
+
+/// The figures a night draws as each run finishes ([`crate::run::nightly::Figures`]): a shear
+/// point's ([`crate::report::shear::figures`]), a replay's plots and its table on stdout.
+pub struct NightFigures;
+
+impl crate::run::nightly::Figures for NightFigures {
+    fn shear(&self, out: &Path, s: &crate::run::shear::ShearSummary) -> Result<()> {
+        crate::report::shear::figures(out, s)
+    }
+
+    fn replay(&self, out: &Path, o: &crate::run::replay::ReplayOutcome, ran: bool) -> Result<()> {
+        if ran {
+            crate::report::replay::plot(out, o)?;
+        }
+        print!("{}", crate::report::replay::table(o));
+        Ok(())
+    }
+}
+
+/// Writes `report.html` of a night into its folder `out` ([`report`]) and says where; the
+/// night's outcome ([`Night::finish`]).
+pub fn write_page(night: crate::run::nightly::Night, out: &Path) -> Result<NightlySummary> {
+    let html = report(&night.summary, &night.history, out)?;
+    let page = out.join("report.html");
+    write_atomic(&page, html.as_bytes())?;
+    let s = &night.summary;
+    match &s.rejudged {
+        Some(by) => println!(
+            "nightly of {} judged again by {by}: {}; report {}",
+            s.date_utc,
+            format!("{:?}", s.verdict()).to_lowercase(),
+            page.display()
+        ),
+        None => println!(
+            "\nnightly {}: {} contact runs, {} shear cases, {:.0} s; report {}",
+            if s.pass { "PASS" } else { "FAIL" },
+            s.contact.len(),
+            s.shear.len(),
+            s.wall_time_s,
+            page.display()
+        ),
+    }
+    night.finish(&page)
 }
 
 /// The report page.

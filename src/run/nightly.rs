@@ -7,6 +7,7 @@
 //! Interrupted nights resume: shear seeds already finished in DIR are reused.
 
 use super::contact::{contact_one, contact_runs, ContactRequest, RollingChoice};
+use super::history::{self, Record};
 pub use super::nightly_outcome::*;
 use super::replay::{default_states, ReplayOutcome, ReplayRequest, STEP1_RTOL};
 use super::shear::{SeedResult, ShearRequest, ShearSummary};
@@ -15,7 +16,6 @@ use crate::compare::{within_cis, CONTACT_RTOL, MU_MARGIN, STRESS_RTOL};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
-use crate::report::history::{self, Record};
 use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
@@ -88,10 +88,44 @@ fn history_path(a: &NightlyRequest) -> PathBuf {
     })
 }
 
-/// Runs the night (resuming what DIR holds), writes `summary.json`, appends the history and
-/// writes `report.html`. A case that could not be run is kept in its row and makes the night an
-/// error after everything else has run and been reported.
-pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
+/// What the night draws as each run finishes (the report layer's figures, given by the
+/// command): the run layer runs and judges, and never imports the report layer.
+pub trait Figures {
+    /// A shear point's figures into its folder `out`, from its outcome.
+    fn shear(&self, out: &Path, s: &ShearSummary) -> Result<()>;
+    /// A replay's figures into its folder `out`, and its table on stdout.
+    fn replay(&self, out: &Path, o: &ReplayOutcome, ran: bool) -> Result<()>;
+}
+
+/// A night as run or judged again: its summary and the whole history (this night's records
+/// included), which the report draws trends from.
+pub struct Night {
+    pub summary: NightlySummary,
+    pub history: Vec<Record>,
+}
+
+impl Night {
+    /// The night's outcome once its report is written (`page`): the summary, or the error of
+    /// the cases that could not be run.
+    pub fn finish(self, page: &Path) -> Result<NightlySummary> {
+        let s = self.summary;
+        if !s.errors.is_empty() {
+            return Err(Error::Cases(format!(
+                "{} case(s) of the night could not be run (report written to {}):\n  {}",
+                s.errors.len(),
+                page.display(),
+                s.errors.join("\n  ")
+            )));
+        }
+        Ok(s)
+    }
+}
+
+/// Runs the night (resuming what DIR holds), drawing each run's `figures` as it finishes,
+/// writes `summary.json` and appends the history. A case that could not be run is kept in its
+/// row and makes the night an error ([`Night::finish`]) after everything else has run and been
+/// reported.
+pub fn run(a: &NightlyRequest, figures: &dyn Figures) -> Result<Night> {
     let t0 = Instant::now();
     let start = SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -116,7 +150,7 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
     let contact = contact_night(a)?;
     let shear: Vec<ShearRow> = SHEAR_POINTS
         .iter()
-        .map(|&(mu_r, eta_r, rolling)| shear_night(a, &lig, mu_r, eta_r, rolling))
+        .map(|&(mu_r, eta_r, rolling)| shear_night(a, &lig, mu_r, eta_r, rolling, figures))
         .collect();
     let errors: Vec<String> = contact
         .iter()
@@ -152,26 +186,8 @@ pub fn run(a: &NightlyRequest) -> Result<NightlySummary> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     super::note_summary(&a.out.join("summary.json"));
-    let all = history::append(&history_path, &records(&summary, start, &a.out))?;
-    let html = crate::report::nightly::report(&summary, &all, &a.out)?;
-    write_atomic(&a.out.join("report.html"), html.as_bytes())?;
-    println!(
-        "\nnightly {}: {} contact runs, {} shear cases, {:.0} s; report {}",
-        if summary.pass { "PASS" } else { "FAIL" },
-        summary.contact.len(),
-        summary.shear.len(),
-        summary.wall_time_s,
-        a.out.join("report.html").display()
-    );
-    if !summary.errors.is_empty() {
-        return Err(Error::Cases(format!(
-            "{} case(s) of the night could not be run (report written to {}):\n  {}",
-            summary.errors.len(),
-            a.out.join("report.html").display(),
-            summary.errors.join("\n  ")
-        )));
-    }
-    Ok(summary)
+    let history = history::append(&history_path, &records(&summary, start, &a.out))?;
+    Ok(Night { summary, history })
 }
 
 /// Every built-in contact case with every applicable rolling model, live LIGGGHTS.
@@ -271,6 +287,7 @@ fn shear_night(
     mu_r: f64,
     eta_r: f64,
     rolling: RollingModel,
+    figures: &dyn Figures,
 ) -> ShearRow {
     let preset = if a.quick { Preset::Ci } else { Preset::Fast };
     let dir = shear_dir(mu_r, eta_r, rolling);
@@ -311,7 +328,7 @@ fn shear_night(
     };
     println!("\n== shear {} ==", row.name);
     match super::shear::run(&args).and_then(|s| {
-        crate::report::shear::figures(&args.out, &s)?;
+        figures.shear(&args.out, &s)?;
         super::shear::print_summary(&s, &args.out);
         fill_shear_row(&mut row, &s)
     }) {
@@ -319,7 +336,7 @@ fn shear_night(
         Err(e) => row.error = Some(e.to_string()),
     }
     println!("\n== replay {} ==", row.name);
-    match replay_night(a, lig, preset, mu_r, eta_r, rolling, &row.dir) {
+    match replay_night(a, lig, preset, mu_r, eta_r, rolling, &row.dir, figures) {
         Ok(r) => {
             row.pass &= r.pass;
             row.replay = Some(r);
@@ -423,21 +440,11 @@ pub fn rejudge(s: &mut NightlySummary) -> Result<()> {
 /// `verify nightly --rerender`: the stored `summary.json` of `a.out` judged again
 /// ([`rejudge`]) and its `report.html` made again by this version, with the history read (not
 /// appended). No case runs; `summary.json` is kept as the night wrote it.
-pub fn rerender(a: &NightlyRequest) -> Result<NightlySummary> {
+pub fn rerender(a: &NightlyRequest) -> Result<Night> {
     let mut summary: NightlySummary = super::load(&a.out.join("summary.json"))?;
     rejudge(&mut summary)?;
-    let all = history::read(&history_path(a))?;
-    let html = crate::report::nightly::report(&summary, &all, &a.out)?;
-    let page = a.out.join("report.html");
-    write_atomic(&page, html.as_bytes())?;
-    println!(
-        "nightly of {} judged again by {}: {}; report {}",
-        summary.date_utc,
-        summary.rejudged.as_deref().unwrap_or_default(),
-        format!("{:?}", summary.verdict()).to_lowercase(),
-        page.display()
-    );
-    Ok(summary)
+    let history = history::read(&history_path(a))?;
+    Ok(Night { summary, history })
 }
 
 /// `verify replay` of a nightly point: seed 1, windows in compaction and early shear (a stored
@@ -450,6 +457,7 @@ fn replay_night(
     eta_r: f64,
     rolling: RollingModel,
     dir: &str,
+    figures: &dyn Figures,
 ) -> Result<ReplayRow> {
     let case = ShearCase::preset(preset, rolling, mu_r, eta_r, 1)?;
     let steps = 12;
@@ -463,8 +471,8 @@ fn replay_night(
                 && o.windows.len() == states.len()
                 && o.windows.iter().all(|w| w.steps.len() as u64 == steps)
         });
-    let o = match stored {
-        Some(o) => o,
+    let (o, ran) = match stored {
+        Some(o) => (o, false),
         None => {
             std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
             let req = ReplayRequest {
@@ -472,14 +480,12 @@ fn replay_night(
                 states,
                 steps,
                 rtol: STEP1_RTOL,
-                out,
+                out: out.clone(),
             };
-            let o = super::replay::run(&req, lig, |m| println!("  {m}"))?;
-            crate::report::replay::plot(&req.out, &o)?;
-            o
+            (super::replay::run(&req, lig, |m| println!("  {m}"))?, true)
         }
     };
-    print!("{}", crate::report::replay::table(&o));
+    figures.replay(&out, &o, ran)?;
     Ok(ReplayRow {
         pass: o.pass,
         windows: o.windows.len(),
