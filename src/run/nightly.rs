@@ -336,7 +336,9 @@ fn shear_night(
         Err(e) => row.error = Some(e.to_string()),
     }
     println!("\n== replay {} ==", row.name);
-    match replay_night(a, lig, preset, mu_r, eta_r, rolling, &row.dir, figures) {
+    match ShearCase::preset(preset, rolling, mu_r, eta_r, 1)
+        .and_then(|case| replay_night(a, lig, case, &row.dir, figures))
+    {
         Ok(r) => {
             row.pass &= r.pass;
             row.replay = Some(r);
@@ -447,19 +449,15 @@ pub fn rerender(a: &NightlyRequest) -> Result<Night> {
     Ok(Night { summary, history })
 }
 
-/// `verify replay` of a nightly point: seed 1, windows in compaction and early shear (a stored
+/// `verify replay` of a nightly point (`case`: its seed 1): windows in compaction and early shear (a stored
 /// outcome of the same case and windows is reused, so a resumed night does not redo it).
 fn replay_night(
     a: &NightlyRequest,
     lig: &Liggghts,
-    preset: Preset,
-    mu_r: f64,
-    eta_r: f64,
-    rolling: RollingModel,
+    case: ShearCase,
     dir: &str,
     figures: &dyn Figures,
 ) -> Result<ReplayRow> {
-    let case = ShearCase::preset(preset, rolling, mu_r, eta_r, 1)?;
     let steps = 12;
     let states = default_states(&case, if a.quick { 4 } else { 6 }, steps, 20_000);
     let out = a.out.join(dir).join("replay");
