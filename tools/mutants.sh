@@ -5,6 +5,7 @@
 # a rerun skips the mutants already tested (--iterate) and goes on with the others, in a
 # shuffled order, so that the mutants tested so far are a random sample of all.
 #   bash tools/mutants.sh [DIR] [-- extra cargo-mutants args]     DIR default /work/mutants
+#   MUTANTS_NICE=0 bash tools/mutants.sh     # at the priority of other work (default nice 10)
 # The tests run per mutant are those that judge these files quickly: the library's unit tests
 # of the solver, compare and calibration modules, the stored two-body references
 # (tests/contact_reference.rs), the closed-form physics (tests/analytic.rs), the calibration
@@ -26,11 +27,15 @@ files=(
 # an interrupted run may leave a mutant in the tree: back to the commit first
 git -C "$dir/tree" reset -q --hard
 git -C "$dir/tree" fetch -q "$repo" HEAD && git -C "$dir/tree" checkout -q --detach FETCH_HEAD
+# --iterate skips the mutants named in mutants.out/{caught,previously_caught,unviable}.txt;
+# an interrupted run writes those lists but no outcomes.json, so test for the lists
 iterate=()
-[ -f "$dir/mutants.out/outcomes.json" ] && iterate=(--iterate)
+for f in caught previously_caught unviable; do
+  [ -s "$dir/mutants.out/$f.txt" ] && iterate=(--iterate)
+done
 cd "$dir/tree"
 # only the test targets named below are built and run per mutant (-C applies to the build too)
-nice -n 10 cargo mutants "${files[@]}" "${iterate[@]}" --in-place --profile mutants \
+nice -n "${MUTANTS_NICE:-10}" cargo mutants "${files[@]}" "${iterate[@]}" --in-place --profile mutants \
   --shuffle --output "$dir" --timeout-multiplier 3 \
   -C --lib -C --test=contact_reference -C --test=analytic -C --test=chung_ooi \
   -C --test=calibration \
