@@ -456,11 +456,6 @@ pub fn window_figures(s: &Series, w: (u64, u64), area: f64) -> WindowFigures {
     }
 }
 
-/// Steady window rule: the second half (by steps) of the last shear stage.
-pub fn steady_window(stage_start: u64, stage_end: u64) -> (u64, u64) {
-    (stage_start + (stage_end - stage_start) / 2, stage_end)
-}
-
 /// Steady-state figures from one series per seed ([`window_figures`] of each, then the
 /// mean over seeds); `area` converts force to stress. The CIs are over seeds; with one seed
 /// they come from 10 block means of the window ([`block_ci95`]).
@@ -581,13 +576,6 @@ mod shear_tests {
         assert!((block_ci95(&v) - 2.262157 * sd / 10f64.sqrt()).abs() < 1e-5);
     }
 
-    /// The steady window is the second half of the stage, wherever the stage starts.
-    #[test]
-    fn steady_window_is_the_second_half_of_the_stage() {
-        assert_eq!(steady_window(0, 30), (15, 30));
-        assert_eq!(steady_window(100, 300), (200, 300));
-    }
-
     #[test]
     fn steady_mean_and_ci() {
         let (m, ci) = mean_ci95(&[1.0, 2.0, 3.0]);
@@ -606,7 +594,7 @@ mod shear_tests {
         assert_eq!(t95(0), f64::INFINITY);
         let st = steady(
             &[s(&[1.0, 2.0, 3.0, 4.0]), s(&[2.0, 2.0, 2.0, 2.0])],
-            steady_window(0, 30),
+            crate::spec::windows::steady_window(0, 30),
             10.0,
         );
         assert_eq!(st.per_seed_mu, vec![0.35, 0.2]);
@@ -614,7 +602,11 @@ mod shear_tests {
         assert_eq!(st.normal_stress, 1.0);
         // no kinetic-energy or mobilisation columns: NaN, never a made-up zero
         assert!(st.erot.is_nan() && st.ke.is_nan() && st.mobilised.is_nan());
-        let one = steady(&[s(&[1.0, 2.0, 3.0, 4.0])], steady_window(0, 30), 10.0);
+        let one = steady(
+            &[s(&[1.0, 2.0, 3.0, 4.0])],
+            crate::spec::windows::steady_window(0, 30),
+            10.0,
+        );
         assert_eq!((one.mu, one.per_seed_mu.clone()), (0.35, vec![0.35]));
         assert!(
             one.mu_ci95.is_finite() && one.mu_ci95 > 0.0,

@@ -22,67 +22,16 @@
 //!   plate speed would be lost at the steepest layer-to-layer gradient: the gap for uniform
 //!   shear without slip, less when the shear localises.
 
-use crate::compare::{mean_ci95, steady_window};
+use crate::compare::mean_ci95;
 use crate::error::{Error, Result};
 use crate::spec::shear::ShearCase;
+use crate::spec::windows::{schedule, SampleWindow};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write;
-
-/// Samples per stage, evenly spaced over its steady window.
-pub const SAMPLES_PER_STAGE: u64 = 20;
 
 /// The codes' slips at a plate agree when their difference is within the two CIs summed:
 /// |a - b| / (ci_a + ci_b) at most this (NaN, a comparison of nothing, fails).
 pub const SLIP_CI_LIMIT: f64 = 1.0;
-
-/// The sample steps of one stage: `first + every k` for k = 0 .. samples.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct SampleWindow {
-    pub stage: usize,
-    pub first: u64,
-    pub every: u64,
-    pub samples: u64,
-}
-
-impl SampleWindow {
-    pub fn steps(&self) -> impl Iterator<Item = u64> + '_ {
-        (0..self.samples).map(|k| self.first + k * self.every)
-    }
-
-    pub fn last(&self) -> u64 {
-        self.first + (self.samples - 1) * self.every
-    }
-}
-
-/// Where both codes sample: per stage, up to [`SAMPLES_PER_STAGE`] output steps (multiples of
-/// `output_every`, where both codes record the top plate's position) evenly spaced over its
-/// steady window, the last at or just before the stage's end.
-pub fn schedule(case: &ShearCase) -> Vec<SampleWindow> {
-    let ends = case.run_ends();
-    let out = case.output_every;
-    (1..ends.len())
-        .filter_map(|k| {
-            let (a, b) = steady_window(ends[k - 1], ends[k]);
-            let last = b / out * out;
-            let span = last.checked_sub(a)?;
-            let every = (span / SAMPLES_PER_STAGE / out).max(1) * out;
-            let samples = (span.saturating_sub(1) / every + 1).min(SAMPLES_PER_STAGE);
-            (last > a).then_some(SampleWindow {
-                stage: k - 1,
-                first: last - (samples - 1) * every,
-                every,
-                samples,
-            })
-        })
-        .collect()
-}
-
-/// Whether `step` is a sample step of the schedule.
-pub fn is_sample(windows: &[SampleWindow], step: u64) -> bool {
-    windows
-        .iter()
-        .any(|w| step >= w.first && step <= w.last() && (step - w.first).is_multiple_of(w.every))
-}
 
 /// Heights and shear velocities of every grain at one step, and where the top plate's base was.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -330,44 +279,6 @@ pub fn csv(profiles: &[VelocityProfile]) -> String {
     s
 }
 
-/// The deck commands that dump `id y vx` at the schedule's steps: an equal-style variable
-/// gives the next sample step (`dump_modify every v_pnext`), per window
-/// `max(first, first + every (floor((step - first) / every) + 1))`, `max(a, b)` written as
-/// `(a + b + |a - b|) / 2` as in the replay's dumps.
-pub fn deck_dumps(windows: &[SampleWindow], prefix: &str) -> String {
-    let max2 = |a: &str, b: &str| format!("(({a})+({b})+abs(({a})-({b})))/2");
-    let mut terms = Vec::new();
-    let mut prev_end: Option<u64> = None;
-    for w in windows {
-        let lo = prev_end
-            .map(|p| format!("(step>={p})*"))
-            .unwrap_or_default();
-        let next = format!(
-            "{}+{}*(floor((step-{})/{})+1)",
-            w.first, w.every, w.first, w.every
-        );
-        terms.push(format!(
-            "{lo}(step<{})*{}",
-            w.last(),
-            max2(&w.first.to_string(), &next)
-        ));
-        prev_end = Some(w.last());
-    }
-    if let Some(p) = prev_end {
-        terms.push(format!("(step>={p})*1e15"));
-    }
-    let mut d = String::new();
-    writeln!(d, "# velocity-profile samples").unwrap();
-    writeln!(d, "variable pnext equal \"{}\"", terms.join("+")).unwrap();
-    writeln!(d, "dump prof all custom 1 {prefix}*.dump id y vx").unwrap();
-    writeln!(
-        d,
-        "dump_modify prof every v_pnext sort id format \"%d %.17g %.17g\""
-    )
-    .unwrap();
-    d
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -376,24 +287,6 @@ mod tests {
 
     fn case() -> ShearCase {
         ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.0, 0.0, 1).unwrap()
-    }
-
-    #[test]
-    fn schedule_samples_the_steady_window() {
-        let c = case();
-        let ends = c.run_ends();
-        let w = schedule(&c);
-        assert_eq!(w.len(), c.stages.len());
-        let (a, b) = steady_window(ends[0], ends[1]);
-        assert!(
-            w[0].last() <= b && b - w[0].last() < c.output_every,
-            "{w:?}"
-        );
-        assert!(w[0].first > a, "{w:?}");
-        assert!(w[0].steps().all(|s| s.is_multiple_of(c.output_every)));
-        assert_eq!(w[0].samples, SAMPLES_PER_STAGE);
-        assert_eq!(w[0].steps().filter(|s| is_sample(&w, *s)).count(), 20);
-        assert!(!is_sample(&w, w[0].first + 1) && !is_sample(&w, a));
     }
 
     fn sample(c: &ShearCase, step: u64, u: impl Fn(f64) -> f64) -> ProfileSample {
@@ -470,32 +363,5 @@ mod tests {
             .collect();
         let e = profiles(&c, &s).unwrap_err().to_string();
         assert!(e.contains("19 of 20"), "{e}");
-    }
-
-    #[test]
-    fn deck_schedule_names_the_next_sample() {
-        let w = [SampleWindow {
-            stage: 0,
-            first: 100,
-            every: 10,
-            samples: 3,
-        }];
-        let d = deck_dumps(&w, "prof_");
-        assert!(d.contains("(step<120)*"), "{d}");
-        assert!(d.contains("(step>=120)*1e15"), "{d}");
-        // evaluate the variable's formula here the way LIGGGHTS would
-        let next = |step: f64| {
-            let a = 100.0;
-            let b = 100.0 + 10.0 * (((step - 100.0) / 10.0).floor() + 1.0);
-            if step < 120.0 {
-                (a + b + (a - b).abs()) / 2.0
-            } else {
-                1e15
-            }
-        };
-        assert_eq!(
-            [next(0.0), next(100.0), next(105.0), next(110.0)],
-            [100.0, 110.0, 110.0, 120.0]
-        );
     }
 }

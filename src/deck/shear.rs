@@ -12,7 +12,7 @@ use std::fmt::Write;
 pub const BOTTOM_STL: &str = "bottom.stl";
 pub const TOP_STL: &str = "top.stl";
 pub const SNAPSHOT_PREFIX: &str = "snap_";
-/// Velocity-profile samples ([`crate::profile::deck_dumps`]).
+/// Velocity-profile samples ([`profile_dumps`]).
 pub const PROFILE_PREFIX: &str = "prof_";
 
 /// Thermo columns after `Step`, in this order, parsed by [`crate::liggghts::read_thermo`].
@@ -237,8 +237,8 @@ pub fn shear_deck_with(case: &ShearCase, packing: &Packing, extras: &DeckExtras)
         .unwrap();
         writeln!(w, "dump_modify snap sort id").unwrap();
     }
-    w.push_str(&crate::profile::deck_dumps(
-        &crate::profile::schedule(case),
+    w.push_str(&profile_dumps(
+        &crate::spec::windows::schedule(case),
         PROFILE_PREFIX,
     ));
     w.push_str(&extras.before_runs);
@@ -350,5 +350,76 @@ pub fn shear_deck_with(case: &ShearCase, packing: &Packing, extras: &DeckExtras)
                 stl("top", &plate_triangles(&top, case.box_z)),
             ),
         ],
+    }
+}
+
+/// The deck commands that dump `id y vx` at the schedule's steps: an equal-style variable
+/// gives the next sample step (`dump_modify every v_pnext`), per window
+/// `max(first, first + every (floor((step - first) / every) + 1))`, `max(a, b)` written as
+/// `(a + b + |a - b|) / 2` as in the replay's dumps.
+fn profile_dumps(windows: &[crate::spec::windows::SampleWindow], prefix: &str) -> String {
+    let max2 = |a: &str, b: &str| format!("(({a})+({b})+abs(({a})-({b})))/2");
+    let mut terms = Vec::new();
+    let mut prev_end: Option<u64> = None;
+    for w in windows {
+        let lo = prev_end
+            .map(|p| format!("(step>={p})*"))
+            .unwrap_or_default();
+        let next = format!(
+            "{}+{}*(floor((step-{})/{})+1)",
+            w.first, w.every, w.first, w.every
+        );
+        terms.push(format!(
+            "{lo}(step<{})*{}",
+            w.last(),
+            max2(&w.first.to_string(), &next)
+        ));
+        prev_end = Some(w.last());
+    }
+    if let Some(p) = prev_end {
+        terms.push(format!("(step>={p})*1e15"));
+    }
+    let mut d = String::new();
+    writeln!(d, "# velocity-profile samples").unwrap();
+    writeln!(d, "variable pnext equal \"{}\"", terms.join("+")).unwrap();
+    writeln!(d, "dump prof all custom 1 {prefix}*.dump id y vx").unwrap();
+    writeln!(
+        d,
+        "dump_modify prof every v_pnext sort id format \"%d %.17g %.17g\""
+    )
+    .unwrap();
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::windows::SampleWindow;
+
+    #[test]
+    fn deck_schedule_names_the_next_sample() {
+        let w = [SampleWindow {
+            stage: 0,
+            first: 100,
+            every: 10,
+            samples: 3,
+        }];
+        let d = profile_dumps(&w, "prof_");
+        assert!(d.contains("(step<120)*"), "{d}");
+        assert!(d.contains("(step>=120)*1e15"), "{d}");
+        // evaluate the variable's formula here the way LIGGGHTS would
+        let next = |step: f64| {
+            let a = 100.0;
+            let b = 100.0 + 10.0 * (((step - 100.0) / 10.0).floor() + 1.0);
+            if step < 120.0 {
+                (a + b + (a - b).abs()) / 2.0
+            } else {
+                1e15
+            }
+        };
+        assert_eq!(
+            [next(0.0), next(100.0), next(105.0), next(110.0)],
+            [100.0, 110.0, 110.0, 120.0]
+        );
     }
 }

@@ -6,9 +6,7 @@ pub use super::convergence_outcome::*;
 use super::shear::ShearRequest;
 use super::sweep::run_input_hash;
 use super::utc_stamp;
-use crate::compare::{
-    equivalence, equivalence_one_seed, steady, steady_window, Equivalence, Outcome,
-};
+use crate::compare::{equivalence, equivalence_one_seed, steady, Equivalence, Outcome};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
@@ -18,6 +16,7 @@ use crate::shear::{run_liggghts, run_native, write_series, Checkpointing, CHECKP
 use crate::solver::shear::compact;
 use crate::spec::shear::ShearCase;
 use crate::spec::stability_shear::stability;
+use crate::spec::windows::steady_window;
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
 use std::path::Path;

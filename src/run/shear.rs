@@ -2,9 +2,7 @@
 //! one initial packing per seed, compared in lockstep and at steady state.
 
 use super::{utc_stamp, Engine, LiggghtsRequest, Verdict, SHEAR_TIMEOUT_S};
-use crate::compare::{
-    lockstep, steady, steady_window, Horizon, Steady, LOCKSTEP_RTOL, MU_MARGIN, STRESS_RTOL,
-};
+use crate::compare::{lockstep, steady, Horizon, Steady, LOCKSTEP_RTOL, MU_MARGIN, STRESS_RTOL};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
@@ -16,6 +14,7 @@ use crate::shear::{
     run_liggghts, run_native, write_packing, Checkpointing, CodeRun, Row, CHECKPOINT_EVERY,
 };
 use crate::spec::shear::{CaseRequest, Preset, ShearCase, Stage};
+use crate::spec::windows::steady_window;
 use crate::spec::RollingModel;
 use indicatif::MultiProgress;
 use serde::{Deserialize, Serialize};

@@ -9,12 +9,13 @@
 
 use super::shear::{ShearRequest, ShearSummary};
 pub use super::Engine;
-use crate::compare::{steady, steady_window, Steady};
+use crate::compare::{steady, Steady};
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
 use crate::series::Series;
 use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::stability_shear::stability;
+use crate::spec::windows::steady_window;
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

@@ -11,6 +11,7 @@ pub mod paper_table;
 pub mod shear;
 mod stability;
 pub mod stability_shear;
+pub mod windows;
 
 pub use builtin::{builtin_case, builtin_names, BUILTIN_CASES};
 pub use stability::{hertz_collision, rayleigh_time, HertzCollision};
