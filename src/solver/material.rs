@@ -1,6 +1,7 @@
 //! Per-type-pair material parameters, derived exactly as LIGGGHTS' global_properties.cpp does.
 
-use crate::spec::{Material, Models, RollingModel};
+use crate::solver::contact::models::RollingModel;
+use crate::spec::{Material, Models};
 
 /// The constants one contact needs, for a single material (type 1 with itself).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -92,8 +93,8 @@ mod tests {
             rolling_stiffness: 2.25,
         };
         let models = Models {
-            normal: crate::spec::NormalModel::Hertz,
-            tangential: crate::spec::TangentialModel::History,
+            normal: crate::solver::contact::models::NormalModel::Hertz,
+            tangential: crate::solver::contact::models::TangentialModel::History,
             rolling: RollingModel::Epsd,
             torsion_torque: false,
         };

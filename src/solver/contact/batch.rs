@@ -96,8 +96,8 @@ pub fn pair<L: Lanes>(a: &PairIn<L>, p: &PairParams, update_history: bool) -> Pa
 mod tests {
     use super::super::test_support::{material, params};
     use super::*;
+    use crate::solver::contact::models::RollingModel;
     use crate::solver::material::sphere_mass;
-    use crate::spec::RollingModel;
 
     fn input(gap: f64) -> PairIn<f64> {
         let m = sphere_mass(1e-4, material().density);

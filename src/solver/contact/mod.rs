@@ -28,6 +28,7 @@
 
 pub mod batch;
 pub mod lanes;
+pub mod models;
 pub mod normal;
 #[cfg(test)]
 mod properties;
@@ -37,7 +38,7 @@ pub mod tangential;
 
 use super::material::PairParams;
 use super::vec3::{dot, V3};
-use crate::spec::RollingModel;
+use crate::solver::contact::models::RollingModel;
 use lanes::{Lanes, Mask};
 
 /// The mask of `like`'s type with no lane set.
@@ -370,7 +371,8 @@ mod history_tests {
 #[cfg(test)]
 pub(crate) mod test_support {
     use super::*;
-    use crate::spec::{Material, Models, NormalModel, TangentialModel};
+    use crate::solver::contact::models::{NormalModel, TangentialModel};
+    use crate::spec::{Material, Models};
 
     pub fn material() -> Material {
         Material {

@@ -313,12 +313,15 @@ impl ShearSim {
             packed_current: false,
             pair_state: Vec::new(),
             pair_damp: Vec::new(),
-            imp: if case.models.rolling == crate::spec::RollingModel::EpsdImplicit {
+            imp: if case.models.rolling
+                == crate::solver::contact::models::RollingModel::EpsdImplicit
+            {
                 vec![([0.0; 6], [0.0; 3]); n]
             } else {
                 Vec::new()
             },
-            implicit: case.models.rolling == crate::spec::RollingModel::EpsdImplicit,
+            implicit: case.models.rolling
+                == crate::solver::contact::models::RollingModel::EpsdImplicit,
             wall: vec![WallSlots::default(); n],
             wall_force: vec![([0.0; 3], [0.0; 3]); n],
             wall_start: vec![0; n + 1],
@@ -964,7 +967,7 @@ pub(crate) fn pair_contact(
 mod tests {
     use super::*;
     use crate::packing::loose_packing;
-    use crate::spec::RollingModel;
+    use crate::solver::contact::models::RollingModel;
 
     /// A particle's plate records survive the checkpoint form (a count and 8 fixed slots)
     /// unchanged, in order, and a record count beyond 8 is not read past the slots.

@@ -281,8 +281,8 @@ fn box_distance_sq(p: &V3, nodes: &[V3; 3], s: V3) -> f64 {
 mod tests {
     use super::*;
     use crate::packing::loose_packing;
+    use crate::solver::contact::models::RollingModel;
     use crate::spec::shear::{Preset, ShearCase};
-    use crate::spec::RollingModel;
 
     /// The candidates found through the window of triangles by x are those of testing every
     /// triangle of every mesh at every image, in the same order, with the bottom plate

@@ -36,7 +36,7 @@ mod tests {
     use super::super::super::surface::default::surface;
     use super::super::super::test_support::{pair, params, wall};
     use super::*;
-    use crate::spec::RollingModel;
+    use crate::solver::contact::models::RollingModel;
     use approx::assert_relative_eq;
 
     #[test]

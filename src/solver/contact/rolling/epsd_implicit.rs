@@ -35,7 +35,7 @@ mod tests {
     use super::super::super::surface::default::surface;
     use super::super::super::test_support::{pair, params};
     use super::*;
-    use crate::spec::RollingModel;
+    use crate::solver::contact::models::RollingModel;
     use approx::assert_relative_eq;
 
     /// epsd's spring alone in the torque; `C_r = eta_r 2 sqrt(I_r k_r)` handed to the

@@ -4,8 +4,8 @@ use super::super::neighbor::NeighborList;
 use super::super::ShearSim;
 use super::*;
 use crate::packing::loose_packing;
+use crate::solver::contact::models::RollingModel;
 use crate::spec::shear::{Preset, ShearCase};
-use crate::spec::RollingModel;
 
 /// A dense sheared ci-preset state of `model` (mu_r 0.5, restitution `e`, eta_r `eta`
 /// where it applies): compacted, then sheared so that contacts carry built-up, capped and
