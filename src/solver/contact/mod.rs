@@ -341,7 +341,53 @@ pub fn surfaces_intersect<L: Lanes>(
 
 #[cfg(test)]
 mod history_tests {
-    use super::{moved_beyond_half_skin, ContactHistory};
+    use super::{moved_beyond_half_skin, pair_geometry, ContactData, ContactHistory};
+
+    /// A sphere on a moving wall (fix_wall_gran.cpp's set-up): the contact vector is the
+    /// triangle test's negated on every axis, `en = delta / r` with `r = r_i - overlap`, and the
+    /// wall's velocity is j's (two cargo-mutants survivors: the walls of the mutants' test set
+    /// lay along one axis and stood still).
+    #[test]
+    fn a_wall_contact_takes_the_negated_vector_and_the_wall_velocity() {
+        let to_wall = [0.3e-3, -0.8e-3, 0.45e-3];
+        let (radi, deltan) = (1e-3, -2e-6);
+        let (v_i, v_wall, omega_i) = ([0.1, 0.2, 0.3], [1e-3, 0.0, -2e-3], [4.0, 5.0, 6.0]);
+        let c = ContactData::wall(radi, 3e-6, to_wall, deltan, v_i, v_wall, omega_i);
+        let r = radi - 2e-6;
+        assert_eq!(c.delta, to_wall.map(|d| -d));
+        assert_eq!(c.r, r);
+        assert_eq!(c.en, to_wall.map(|d| -d * (1.0 / r)));
+        assert_eq!((c.deltan, c.radsum, c.meff, c.mi), (2e-6, radi, 3e-6, 3e-6));
+        assert_eq!((c.v_i, c.v_j, c.omega_i), (v_i, v_wall, omega_i));
+        assert!(c.is_wall);
+    }
+
+    /// A pair across the periodic corner of x and z: j is seen at its image `x_j + shift`
+    /// on every axis (y's shift is 0), `delta = x_i - x_j'` and `rsq` summed as pair_gran_base.h
+    /// sums it; the pair touches iff `rsq < radsum^2` (two cargo-mutants survivors: the image
+    /// was held only by the shear tests, outside the mutants' test set).
+    #[test]
+    fn a_pair_sees_its_partner_at_its_image() {
+        let (xi, xj, shift): ([f64; 3], [f64; 3], [f64; 3]) = (
+            [0.1e-3, 2.0e-3, 3.9e-3],
+            [3.95e-3, 2.5e-3, 0.05e-3],
+            [-4e-3, 0.0, 4e-3],
+        );
+        let image = [xj[0] + shift[0], xj[1] + shift[1], xj[2] + shift[2]];
+        let d = [xi[0] - image[0], xi[1] - image[1], xi[2] - image[2]];
+        let rsq = (d[0] * d[0] + d[1] * d[1]) + d[2] * d[2];
+        assert!(
+            (d[1] + 0.5e-3).abs() < 1e-15 && (d[2] + 0.15e-3).abs() < 1e-12,
+            "{d:?}"
+        );
+        let r = rsq.sqrt();
+        for (radi, radj, touching) in [(0.3e-3, 0.3e-3, true), (0.2e-3, 0.2e-3, false)] {
+            let (delta, got, touch) = pair_geometry::<f64>(xi, xj, shift, radi, radj);
+            assert_eq!(delta.map(f64::to_bits), d.map(f64::to_bits));
+            assert_eq!(got.to_bits(), rsq.to_bits());
+            assert_eq!(touch, touching, "r {r}, radsum {}", radi + radj);
+        }
+    }
 
     /// An atom triggers a rebuild once it moved strictly more than skin/2 since the last
     /// build, in any direction (a cargo-mutants survivor: no test held the check).
