@@ -10,6 +10,7 @@
 //! plate contacts in feature order; plate totals are summed in particle order. Results are
 //! bit-identical for any number of threads (tested).
 
+pub mod bricks;
 mod implicit;
 pub mod neighbor;
 mod observe;
