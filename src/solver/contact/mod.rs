@@ -208,6 +208,18 @@ impl ContactData<f64> {
     }
 }
 
+impl ContactHistory {
+    /// The history of the same contact seen from the other side (j against i): a pair that
+    /// started or stopped crossing a periodic seam turns round, and its relative history
+    /// changes sign.
+    pub fn turned_round(self) -> Self {
+        ContactHistory {
+            shear: self.shear.map(|c| -c),
+            r_torque: self.r_torque.map(|c| -c),
+        }
+    }
+}
+
 /// `Neighbor::check_distance` for one atom: it moved more than skin/2 since the last build
 /// (`|x - x_hold|^2 > (skin/2)^2`, evaluated as LIGGGHTS does).
 pub fn moved_beyond_half_skin(x: V3, hold: V3, skin: f64) -> bool {

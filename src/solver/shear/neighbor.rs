@@ -277,14 +277,7 @@ impl NeighborList {
                 let (old_i, h) = (carried_ij[k].0, carried_hist[k]);
                 // a pair that started or stopped crossing the seam turned round: its history
                 // is relative (i against j), so it changes sign
-                *nh = if old_i == p.i {
-                    h
-                } else {
-                    ContactHistory {
-                        shear: h.shear.map(|c| -c),
-                        r_torque: h.r_torque.map(|c| -c),
-                    }
-                };
+                *nh = if old_i == p.i { h } else { h.turned_round() };
             }
         }
         drop((touching, carried_ij, carried_hist));

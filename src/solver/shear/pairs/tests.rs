@@ -213,14 +213,7 @@ fn pass_on(s: &ShearSim, ids: &[usize], path: KernelPath) -> (NeighborList, Vec<
     for (p, h) in nl.pairs.iter().zip(nl.hist.iter_mut()) {
         let (gi, gj) = (ids[p.i as usize], ids[p.j as usize]);
         if let Some(&(old_i, old)) = before.get(&key(gi, gj)) {
-            *h = if old_i == gi {
-                old
-            } else {
-                crate::solver::contact::ContactHistory {
-                    shear: old.shear.map(|c| -c),
-                    r_torque: old.r_torque.map(|c| -c),
-                }
-            };
+            *h = if old_i == gi { old } else { old.turned_round() };
         }
     }
     let packed: Vec<Packed> = if path == KernelPath::Scalar {
@@ -305,7 +298,6 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
                 lx: base.box_.lx,
                 lz: base.box_.lz,
             };
-            let (bx, bz) = (nx, nz);
             let mut owned_total = 0;
             let mut crossing = 0;
             for b in 0..bricks.count() {
@@ -324,7 +316,7 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
                     assert_eq!(
                         bits(&lacc[a]),
                         bits(&gacc[q]),
-                        "{path:?}, {bx}x{bz} bricks, brick ({rx}, {rz}): particle {q}"
+                        "{path:?}, {nx}x{nz} bricks, brick ({rx}, {rz}): particle {q}"
                     );
                 }
                 owned_total += mine;
@@ -347,10 +339,10 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
                     );
                 }
                 let expected = global.keys().filter(|&&(a, b)| owns(a) || owns(b)).count();
-                assert_eq!(listed, expected, "{bx}x{bz} brick ({rx}, {rz}): pairs");
+                assert_eq!(listed, expected, "{nx}x{nz} brick ({rx}, {rz}): pairs");
             }
             assert_eq!(owned_total, n, "every particle owned once");
-            assert!(crossing > 100, "{bx}x{bz}: {crossing} pairs across bricks");
+            assert!(crossing > 100, "{nx}x{nz}: {crossing} pairs across bricks");
         }
         assert!(gacc.iter().any(|f| f.delta_f != [0.0; 3]));
         eprintln!(
