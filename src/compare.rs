@@ -848,6 +848,28 @@ mod equivalence_tests {
         );
     }
 
+    /// The seeds said to decide do decide: at that n the CI the judge applies clears the
+    /// margin and at n - 1 it does not, on both sides of the margin, exact ties included
+    /// (a half-width equal to the gap is not inside it: the judge's `<` and `>` are strict;
+    /// a cargo-mutants survivor: `<=` in the search returned a count one short at a tie).
+    #[test]
+    fn the_seeds_said_to_decide_decide() {
+        let ci = |t: fn(usize) -> f64, sd: f64, n: usize| t(n - 1) * sd / (n as f64).sqrt();
+        // sd 2, n 4: the 90 % half-width t(3) 2 / 2 is t(3) exactly: a margin of t(3) is a tie
+        let tie = t95_one_sided(3);
+        let mut cases = vec![(0.0, 2.0, tie), (0.0, 1.0, 1.5), (3.0, 1.0, 1.5)];
+        // toward DISAGREE, a tie at n 4: the 95 % half-width t(3) 2 / 2 = t(3), mean 2 t(3)
+        cases.push((2.0 * t95(3), 2.0, t95(3)));
+        for (mean, sd, margin) in cases {
+            let n = seeds_needed(mean, sd, margin).unwrap();
+            let outcome = |n| judge(mean, ci(t95_one_sided, sd, n), ci(t95, sd, n), margin);
+            assert_ne!(outcome(n), Outcome::Inconclusive, "{mean} {sd} {margin}: n {n}");
+            assert_eq!(outcome(n - 1), Outcome::Inconclusive, "{mean} {sd} {margin}");
+        }
+        assert_eq!(seeds_needed(0.0, 2.0, tie), Some(5));
+        assert_eq!(seeds_needed(2.0 * t95(3), 2.0, t95(3)), Some(5));
+    }
+
     /// Overlapping 95 % intervals agree, touching ones too, separate ones do not (a
     /// cargo-mutants survivor: `false` everywhere passed).
     #[test]
