@@ -4,7 +4,7 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use dem_verify::packing::{loose_packing, SplitMix64};
 use dem_verify::solver::contact::{surfaces_intersect, ContactData, ContactHistory};
-use dem_verify::solver::material::{sphere_mass, PairParams};
+use dem_verify::solver::material::sphere_mass;
 use dem_verify::solver::shear::neighbor::{NeighborList, Periodic};
 use dem_verify::solver::shear::plate::{plate_triangles, Plate, Side};
 use dem_verify::solver::shear::{compact, KernelPath, ShearSim};
@@ -29,7 +29,7 @@ fn contact(c: &mut Criterion) {
             1,
         )
         .unwrap();
-        let p = PairParams::new(&case.material, &case.models, case.dt);
+        let p = case.material.pair_params(&case.models, case.dt);
         let m = sphere_mass(1.5e-4, 2e6);
         let dz = 2.999e-4;
         let base = ContactData {
@@ -85,7 +85,7 @@ fn neighbor(c: &mut Criterion) {
 
 fn trimesh(c: &mut Criterion) {
     let case = fast_case();
-    let plate = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
+    let plate = Plate::new(Side::Bottom, 0.0, case.plates.shape(case.box_x), case.box_x);
     let mesh = TriMesh::new(
         &plate_triangles(&plate, case.box_z),
         [0.0, -1e-3, 0.0],
@@ -120,8 +120,8 @@ fn trimesh(c: &mut Criterion) {
 fn force_pass(c: &mut Criterion) {
     let case = fast_case();
     let loose = loose_packing(&case);
-    let dense = compact(&case, &loose, 20_000).unwrap();
-    let mut sim = ShearSim::new(&case, &dense);
+    let dense = compact(&case.setup(), &loose, 20_000).unwrap();
+    let mut sim = ShearSim::new(&case.setup(), &dense);
     sim.setup(case.stages[0].speed).unwrap();
     for _ in 0..2_000 {
         sim.step().unwrap();

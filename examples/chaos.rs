@@ -14,7 +14,7 @@ fn main() {
     )
     .unwrap();
     let p = loose_packing(&c);
-    let mut s = ShearSim::new(&c, &p);
+    let mut s = ShearSim::new(&c.setup(), &p);
     s.setup(0.0).unwrap();
     while s.step < c.compression_steps {
         s.step().unwrap();
@@ -22,8 +22,8 @@ fn main() {
     let state = s.state(&p);
     let mut nudged = state.clone();
     nudged.position[0][0] = f64::from_bits(nudged.position[0][0].to_bits() + 1);
-    let mut a = ShearSim::new(&c, &state);
-    let mut b = ShearSim::new(&c, &nudged);
+    let mut a = ShearSim::new(&c.setup(), &state);
+    let mut b = ShearSim::new(&c.setup(), &nudged);
     for sim in [&mut a, &mut b] {
         sim.setup(0.0).unwrap();
         sim.step().unwrap();

@@ -21,7 +21,7 @@ fn main() {
     )
     .unwrap();
     let p = loose_packing(&c);
-    let mut s = ShearSim::new(&c, &p);
+    let mut s = ShearSim::new(&c.setup(), &p);
     s.setup(0.0).unwrap();
     for _ in 0..20_000 {
         s.step().unwrap();

@@ -36,7 +36,7 @@
 
 use crate::error::{Error, Result};
 use crate::series::Series;
-use crate::solver::material::{sphere_mass, PairParams};
+use crate::solver::material::sphere_mass;
 use crate::spec::{
     hertz_collision, rayleigh_time, CaseFile, Material, Models, Motion, NormalModel, ParticleSpec,
     RollingModel, TangentialModel, WallMaterial, WallSpec, CASE_VERSION,
@@ -328,13 +328,8 @@ pub fn cases() -> Vec<BenchmarkCase> {
 
 /// Effective modulus of a sphere of `m` against a body of the same material or a wall's.
 fn y_eff(m: &Material, wall: Option<&WallMaterial>) -> f64 {
-    PairParams::between(
-        m,
-        wall.map(|w| (w.youngs_modulus, w.poisson_ratio)),
-        &models(),
-        1.0,
-    )
-    .y_eff
+    let other = wall.map_or(m.elastic(), WallMaterial::elastic);
+    m.pair_params_against(other, &models(), 1.0).y_eff
 }
 
 /// One figure of a benchmark case, as measured in one code against the benchmark's value.

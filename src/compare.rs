@@ -863,8 +863,16 @@ mod equivalence_tests {
         for (mean, sd, margin) in cases {
             let n = seeds_needed(mean, sd, margin).unwrap();
             let outcome = |n| judge(mean, ci(t95_one_sided, sd, n), ci(t95, sd, n), margin);
-            assert_ne!(outcome(n), Outcome::Inconclusive, "{mean} {sd} {margin}: n {n}");
-            assert_eq!(outcome(n - 1), Outcome::Inconclusive, "{mean} {sd} {margin}");
+            assert_ne!(
+                outcome(n),
+                Outcome::Inconclusive,
+                "{mean} {sd} {margin}: n {n}"
+            );
+            assert_eq!(
+                outcome(n - 1),
+                Outcome::Inconclusive,
+                "{mean} {sd} {margin}"
+            );
         }
         assert_eq!(seeds_needed(0.0, 2.0, tie), Some(5));
         assert_eq!(seeds_needed(2.0 * t95(3), 2.0, t95(3)), Some(5));

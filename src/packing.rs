@@ -1,6 +1,7 @@
 //! The initial loose packing of a shear case, generated once (seeded) so that both codes
 //! start from the identical state (LIGGGHTS reads it with `read_data`).
 
+pub use crate::solver::shear::state::Packing;
 use crate::spec::shear::ShearCase;
 
 /// Packing fraction of the loose initial packing.
@@ -26,24 +27,6 @@ impl SplitMix64 {
     pub fn uniform(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
-}
-
-/// Particles and plate positions of the initial state. y is the plate-normal direction:
-/// the bottom plate's base is at y = 0 (teeth up to `tooth_height`), the top plate's base at
-/// `top_y` (teeth down to `top_y - tooth_height`).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Packing {
-    pub radius: Vec<f64>,
-    pub position: Vec<[f64; 3]>,
-    /// Velocities [m/s] (zero for a generated packing; set for a compacted state).
-    pub velocity: Vec<[f64; 3]>,
-    /// Angular velocities [rad/s].
-    pub omega: Vec<[f64; 3]>,
-    pub top_y: f64,
-    /// Upper bound of the simulation box in y.
-    pub box_y_hi: f64,
-    /// Lower bound of the simulation box in y.
-    pub box_y_lo: f64,
 }
 
 /// The particle a chaos baseline moves by one ulp (native against native, the measure of how

@@ -347,7 +347,7 @@ mod tests {
             .with_rolling(crate::spec::RollingModel::Epsd)
             .validate()
             .unwrap();
-        let mut frames = crate::solver::two_body::run(&case).unwrap();
+        let mut frames = crate::solver::two_body::run(&case.two_body()).unwrap();
         assert!(contact_series(&case, &frames).is_ok());
         let e = contact_series(&case, &[]).unwrap_err().to_string();
         assert!(e.contains("no output frames"), "{e}");

@@ -168,8 +168,9 @@ pub const CHECKPOINT_NAME: &str = "native_checkpoint.bin";
 
 /// Version of the checkpoint format; a checkpoint of another version is not read (3: the
 /// per-pair state split from epsd_implicit's per-pair dashpot, 2026-12-02; 4: sealed, with the
-/// case's hash and the payload's SHA-256 in a header, 2026-12-04).
-const CHECKPOINT_VERSION: u32 = 4;
+/// case's hash and the payload's SHA-256 in a header, 2026-12-04; 5: the solver holds its
+/// own constants, not the case description, 2026-12-05).
+const CHECKPOINT_VERSION: u32 = 5;
 
 /// What the seal of a checkpoint names ([`crate::fsutil::seal`]).
 const CHECKPOINT_KIND: &str = "native shear checkpoint";
@@ -260,7 +261,7 @@ pub fn run_native(
             )
         }
         None => (
-            ShearSim::new(case, packing),
+            ShearSim::new(&case.setup(), packing),
             Vec::new(),
             None,
             Vec::new(),
@@ -584,8 +585,8 @@ pub fn run_liggghts(
         let plates = |step: u64| {
             let top_y = rows.iter().find(|r| r.step == step)?.top_y;
             let d = displacement(case, step);
-            let bottom = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
-            let top = Plate::new(Side::Top, top_y, &case.plates, case.box_x);
+            let bottom = Plate::new(Side::Bottom, 0.0, case.plates.shape(case.box_x), case.box_x);
+            let top = Plate::new(Side::Top, top_y, case.plates.shape(case.box_x), case.box_x);
             let mut b = plate_triangles(&bottom, case.box_z);
             for t in &mut b {
                 for n in t.iter_mut() {

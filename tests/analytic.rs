@@ -12,7 +12,7 @@
 use dem_verify::deck::run_name;
 use dem_verify::run::contact::{contact_runs, RollingChoice};
 use dem_verify::series::{contact_series, Series};
-use dem_verify::solver::material::{sphere_mass, PairParams};
+use dem_verify::solver::material::sphere_mass;
 use dem_verify::solver::two_body;
 use dem_verify::spec::{hertz_collision, Case, Motion, RollingModel};
 use std::path::Path;
@@ -26,7 +26,7 @@ fn both(case: &Case) -> Vec<(&'static str, Series)> {
     vec![
         (
             "native",
-            contact_series(case, &two_body::run(case).unwrap()).unwrap(),
+            contact_series(case, &two_body::run(&case.two_body()).unwrap()).unwrap(),
         ),
         ("liggghts", Series::read_csv(&stored).unwrap()),
     ]
@@ -62,7 +62,7 @@ struct RollingTheory {
 
 impl RollingTheory {
     fn new(case: &Case) -> Self {
-        let p = PairParams::new(&case.material, &case.models, case.dt);
+        let p = case.material.pair_params(&case.models, case.dt);
         let (a, b) = (&case.particles[0], &case.particles[1]);
         let (r1, r2) = (a.radius, b.radius);
         let dist = ((b.position[0] - a.position[0]).powi(2)
@@ -203,7 +203,7 @@ fn rolling_damped_adds_the_viscous_dashpot_below_the_limit() {
 #[test]
 fn normal_elastic_matches_hertz_overlap_and_duration() {
     let case = &contact_runs("normal_elastic", None, RollingChoice::All).unwrap()[0];
-    let p = PairParams::new(&case.material, &case.models, case.dt);
+    let p = case.material.pair_params(&case.models, case.dt);
     let (a, b) = (&case.particles[0], &case.particles[1]);
     let m = sphere_mass(a.radius, case.material.density);
     let v = 2.0 * (a.velocity[0].powi(2) + a.velocity[2].powi(2)).sqrt();
@@ -274,7 +274,7 @@ fn tangential_spring_obeys_the_coulomb_limit() {
     for (name, must_slide) in [("tangential_stick", false), ("tangential_slip", true)] {
         for case in contact_runs(name, None, RollingChoice::All).unwrap() {
             let mu = case.material.friction;
-            let p = PairParams::new(&case.material, &case.models, case.dt);
+            let p = case.material.pair_params(&case.models, case.dt);
             let (a, b) = (&case.particles[0], &case.particles[1]);
             let reff = a.radius * b.radius / (a.radius + b.radius);
             for (code, s) in both(&case) {

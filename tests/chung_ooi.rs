@@ -84,7 +84,7 @@ fn a_ten_per_cent_error_fails_the_benchmark() {
         let right = b.case.clone().validate().unwrap();
         let good = judge(
             b,
-            &contact_series(&right, &two_body::run(&right).unwrap()).unwrap(),
+            &contact_series(&right, &two_body::run(&right.two_body()).unwrap()).unwrap(),
         )
         .unwrap();
         assert!(
@@ -96,7 +96,7 @@ fn a_ten_per_cent_error_fails_the_benchmark() {
         let case = file.validate().unwrap();
         let checks = judge(
             b,
-            &contact_series(&case, &two_body::run(&case).unwrap()).unwrap(),
+            &contact_series(&case, &two_body::run(&case.two_body()).unwrap()).unwrap(),
         )
         .unwrap();
         let c = checks.iter().find(|c| c.figure == figure).unwrap();
@@ -174,7 +174,7 @@ fn every_case_passes_natively_with_the_stated_tolerances() {
         let case = b.case.clone().validate().unwrap();
         let checks = judge(
             b,
-            &contact_series(&case, &two_body::run(&case).unwrap()).unwrap(),
+            &contact_series(&case, &two_body::run(&case.two_body()).unwrap()).unwrap(),
         )
         .unwrap();
         assert!(!checks.is_empty(), "{name}: nothing judged");

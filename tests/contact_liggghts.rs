@@ -27,7 +27,7 @@ fn every_builtin_case_agrees_with_live_liggghts_and_the_stored_reference() {
         let name = run_name(case);
         let dir = tempfile::tempdir().unwrap();
         let live = liggghts_contact_series(case, &contact_deck(case), &lig, dir.path()).unwrap();
-        let native = contact_series(case, &two_body::run(case).unwrap()).unwrap();
+        let native = contact_series(case, &two_body::run(&case.two_body()).unwrap()).unwrap();
         let results = compare(
             &case.name,
             case.models.rolling.keyword(),

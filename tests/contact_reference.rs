@@ -24,7 +24,7 @@ fn native_matches_stored_reference_for_every_case() {
                 .join("liggghts.csv"),
         )
         .unwrap();
-        let native = contact_series(&case, &two_body::run(&case).unwrap())
+        let native = contact_series(&case, &two_body::run(&case.two_body()).unwrap())
             .unwrap()
             .at_steps(&stored.steps)
             .unwrap();
@@ -127,7 +127,7 @@ fn a_wrong_friction_or_rolling_stiffness_fails_the_contact_comparison() {
         let mut file = right.clone();
         wrong(&mut file);
         let case = file.validate().unwrap();
-        let native = contact_series(&case, &two_body::run(&case).unwrap())
+        let native = contact_series(&case, &two_body::run(&case.two_body()).unwrap())
             .unwrap()
             .at_steps(&stored.steps)
             .unwrap();

@@ -130,7 +130,7 @@ fn run(restitution: f64, dt_factor: f64) -> (Vec<Budget>, Vec<[f64; 3]>, Vec<[f6
             w[k] = 500.0 * uniform(&mut state);
         }
     }
-    let mut sim = ShearSim::new(&case, &packing);
+    let mut sim = ShearSim::new(&case.setup(), &packing);
     sim.setup(0.0).unwrap();
     // the top plate held where it is: the servo's speed limit at zero
     sim.servo.vel_max = 0.0;

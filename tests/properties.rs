@@ -171,7 +171,7 @@ fn generated_case_files_are_refused_by_field_or_run() {
                     for case in cases {
                         let deck = contact_deck(&case);
                         prop_assert!(deck.get("in.deck").is_some_and(|d| !d.contains("shell")));
-                        match two_body::run(&case) {
+                        match two_body::run(&case.two_body()) {
                             Ok(frames) => prop_assert!(!frames.is_empty()),
                             // a run may stop, with the step and the reason, never panic
                             Err(Error::Solver { .. }) => {}
@@ -283,7 +283,7 @@ fn generated_shear_arguments_are_refused_by_option_or_start() {
                 Ok((case, _warnings)) => {
                     let packing = loose_packing(&case);
                     prop_assert!(shear_deck(&case, &packing).get("in.deck").is_some());
-                    let mut sim = ShearSim::new(&case, &packing);
+                    let mut sim = ShearSim::new(&case.setup(), &packing);
                     let ran = sim
                         .setup(0.0)
                         .and_then(|_| (0..3).try_for_each(|_| sim.step()));

@@ -60,7 +60,7 @@ fn native_shear_follows_the_stored_liggghts_run() {
     })
     .unwrap();
     assert_eq!(case.material.restitution, 1.0);
-    let compacted = compact(&case, &loose_packing(&case), case.compression_steps).unwrap();
+    let compacted = compact(&case.setup(), &loose_packing(&case), case.compression_steps).unwrap();
     let lc = lockstep_case(&case, STEPS);
     let csv = reference_dir().join("liggghts.csv");
     if std::env::var_os("UPDATE_GOLDEN").is_some() {
@@ -151,7 +151,7 @@ fn epsd3_at_the_epsd_factor_is_epsd_bit_for_bit() {
         .0
     };
     let epsd = build(RollingModel::Epsd, None);
-    let compacted = compact(&epsd, &loose_packing(&epsd), epsd.compression_steps).unwrap();
+    let compacted = compact(&epsd.setup(), &loose_packing(&epsd), epsd.compression_steps).unwrap();
     let run = |c: &ShearCase| native(&lockstep_case(c, STEPS), &compacted);
     let base = run(&epsd);
     let same = run(&build(RollingModel::Epsd3, Some(2.25)));

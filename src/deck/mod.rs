@@ -9,7 +9,6 @@
 pub mod shear;
 
 use crate::solver::kinematics::rotation_period;
-use crate::solver::two_body::contact_skin;
 use crate::spec::{domain_half_size, Case, Material, Models, Motion, RollingModel, WallMaterial};
 use std::fmt::Write;
 
@@ -163,7 +162,7 @@ pub fn contact_deck(case: &Case) -> Deck {
     writeln!(w, "communicate single vel yes").unwrap();
     writeln!(w, "hard_particles yes").unwrap();
     writeln!(w, "read_data {DATA_NAME}").unwrap();
-    writeln!(w, "neighbor {} bin", num(contact_skin(case))).unwrap();
+    writeln!(w, "neighbor {} bin", num(case.skin())).unwrap();
     writeln!(w, "neigh_modify delay 0").unwrap();
     let wall_material = case.wall.as_ref().and_then(|w| w.material.as_ref());
     material_fixes(w, m, rolling, wall_material);

@@ -335,8 +335,13 @@ pub fn shear_deck_with(case: &ShearCase, packing: &Packing, extras: &DeckExtras)
             .unwrap();
         }
     }
-    let bottom = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
-    let top = Plate::new(Side::Top, packing.top_y, &case.plates, case.box_x);
+    let bottom = Plate::new(Side::Bottom, 0.0, case.plates.shape(case.box_x), case.box_x);
+    let top = Plate::new(
+        Side::Top,
+        packing.top_y,
+        case.plates.shape(case.box_x),
+        case.box_x,
+    );
     Deck {
         files: vec![
             (super::DECK_NAME.to_string(), d),

@@ -257,7 +257,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         a.preset, base.particles, a.compression_steps
     );
     let loose = loose_packing(&base);
-    let dense = compact(&base, &loose, a.compression_steps)?;
+    let dense = compact(&base.setup(), &loose, a.compression_steps)?;
     let (case, state) = tile(&base, &dense, k);
     let n = state.radius.len();
     println!(
@@ -315,7 +315,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 };
                 let (secs, cpu, phases, counts, held, cand, rebuilds) =
                     pool.install(|| -> Result<Timed> {
-                        let mut s = ShearSim::new(&c, &state);
+                        let mut s = ShearSim::new(&c.setup(), &state);
                         s.set_kernel(kernel)?;
                         s.setup(0.0)?;
                         s.step()?;

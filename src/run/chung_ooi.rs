@@ -40,7 +40,7 @@ impl BenchmarkOutcome {
 pub fn run_case(b: &BenchmarkCase, lig: &Liggghts, out: &Path) -> Result<BenchmarkOutcome> {
     let case = b.case.clone().validate()?;
     let dir = out.join(&case.name);
-    let native = contact_series(&case, &two_body::run(&case)?)?;
+    let native = contact_series(&case, &two_body::run(&case.two_body())?)?;
     native.write_csv(&dir.join("native.csv"))?;
     let deck = contact_deck(&case);
     let lig_series = super::contact::liggghts_contact_series(&case, &deck, lig, &dir)?;

@@ -134,7 +134,7 @@ pub fn contact_one(
     let dir = out.join(&name);
     let deck = contact_deck(case);
     write_deck(&deck, &dir.join("deck"))?;
-    let native_run = contact_series(case, &two_body::run(case)?)?;
+    let native_run = contact_series(case, &two_body::run(&case.two_body())?)?;
     let (lig_series, native) = match lig {
         None => {
             let reference = read_reference(&a.reference_dir, &name)?;

@@ -196,7 +196,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             None => {
                 if state.is_none() {
                     let loose = loose_packing(case);
-                    *state = Some(compact(case, &loose, case.compression_steps)?);
+                    *state = Some(compact(&case.setup(), &loose, case.compression_steps)?);
                 }
                 let state = state.as_ref().expect("compacted");
                 println!(

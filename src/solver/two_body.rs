@@ -11,16 +11,54 @@ use super::material::{sphere_mass, PairParams};
 use super::mesh::{square_wall, TriContact, Triangle};
 use super::vec3::V3;
 use crate::error::{Error, Result};
-use crate::spec::{Case, Motion};
 
 /// Neighbour skin of the contact cases [m], the same in the deck: a quarter of the smallest
 /// radius.
-pub fn contact_skin(case: &Case) -> f64 {
-    0.25 * case
-        .particles
-        .iter()
-        .map(|p| p.radius)
-        .fold(f64::INFINITY, f64::min)
+pub fn contact_skin(radii: impl IntoIterator<Item = f64>) -> f64 {
+    0.25 * radii.into_iter().fold(f64::INFINITY, f64::min)
+}
+
+/// A contact case as the solver reads it, in its own types (built from a case description
+/// by `spec::Case::two_body`): the pair constants, the bodies, the wall and the run's length.
+#[derive(Clone, Debug)]
+pub struct TwoBody {
+    /// The one time step [s] (nve/sphere's `dtv`; the kernels' copy in `params` is set from
+    /// it).
+    pub dt: f64,
+    /// Particle against particle.
+    pub params: PairParams,
+    /// The sphere against the wall (the wall's own elastic constants, or `params`').
+    pub wall_params: PairParams,
+    /// Particle density [kg/m^3].
+    pub density: f64,
+    pub bodies: Vec<BodySetup>,
+    /// The square wall: its height z [m] and half side [m].
+    pub wall: Option<(f64, f64)>,
+    /// Steps of the run, output interval, and the step whose imposed motions reverse.
+    pub steps: u64,
+    pub output_every: u64,
+    pub reverse_at_step: Option<u64>,
+}
+
+/// One sphere at the start: its state, radius, and how it moves.
+#[derive(Clone, Copy, Debug)]
+pub struct BodySetup {
+    pub x: V3,
+    pub v: V3,
+    pub omega: V3,
+    pub radius: f64,
+    pub motion: BodyMotion,
+}
+
+/// How a sphere moves: integrated by nve/sphere, held still, or by a `fix move`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BodyMotion {
+    Free,
+    Fixed,
+    /// Spins about its own centre at angular velocity omega [rad/s] (`fix move rotate`).
+    Rotate(V3),
+    /// Moves at a constant velocity [m/s] (`fix move linear`).
+    Linear(V3),
 }
 
 /// Per-atom state at an output step, as a LIGGGHTS `dump custom` row.
@@ -68,8 +106,8 @@ struct Sim {
     step: u64,
 }
 
-/// Runs a validated contact case and returns a frame at step 0 and every `output_every`.
-pub fn run(case: &Case) -> Result<Vec<Frame>> {
+/// Runs a contact case and returns a frame at step 0 and every `output_every`.
+pub fn run(case: &TwoBody) -> Result<Vec<Frame>> {
     let mut sim = Sim::new(case);
     let mut frames = Vec::with_capacity((case.steps / case.output_every + 1) as usize);
     let reverse = case.reverse_at_step;
@@ -89,60 +127,53 @@ pub fn run(case: &Case) -> Result<Vec<Frame>> {
 }
 
 impl Sim {
-    fn new(case: &Case) -> Self {
-        let rho = case.material.density;
+    fn new(case: &TwoBody) -> Self {
+        let rho = case.density;
         let bodies: Vec<Body> = case
-            .particles
+            .bodies
             .iter()
             .map(|p| {
                 // The data file holds the diameter; LIGGGHTS reads radius = 0.5 * diameter.
                 let radius = 0.5 * (2.0 * p.radius);
-                let motion = match &p.motion {
-                    Motion::Rotate { omega } => {
-                        Some(FixMove::rotate(p.position, *omega, rotation_period(*omega)))
+                let motion = match p.motion {
+                    BodyMotion::Rotate(omega) => {
+                        Some(FixMove::rotate(p.x, omega, rotation_period(omega)))
                     }
-                    Motion::Linear { velocity } => Some(FixMove::Linear {
-                        xoriginal: p.position,
-                        velocity: *velocity,
+                    BodyMotion::Linear(velocity) => Some(FixMove::Linear {
+                        xoriginal: p.x,
+                        velocity,
                         time_origin: 0,
                     }),
-                    Motion::Free | Motion::Fixed => None,
+                    BodyMotion::Free | BodyMotion::Fixed => None,
                 };
                 Body {
                     s: AtomState {
-                        x: p.position,
-                        v: p.velocity,
+                        x: p.x,
+                        v: p.v,
                         omega: p.omega,
                         ..Default::default()
                     },
                     radius,
                     mass: sphere_mass(radius, rho),
                     motion,
-                    integrate: matches!(p.motion, Motion::Free),
+                    integrate: p.motion == BodyMotion::Free,
                 }
             })
             .collect();
         let xhold = bodies.iter().map(|b| b.s.x).collect();
-        // the one time step, as in the shear box: nve's dtv, the kernels' copy set from it
+        // the one time step, as in the shear box: nve's dtv, the kernels' copies set from it
         let nve = NveSphere::new(case.dt);
+        let at_dt = |p: PairParams| PairParams { dt: nve.dtv, ..p };
         Sim {
-            params: PairParams::new(&case.material, &case.models, nve.dtv),
-            wall_params: PairParams::between(
-                &case.material,
-                case.wall
-                    .as_ref()
-                    .and_then(|w| w.material)
-                    .map(|wm| (wm.youngs_modulus, wm.poisson_ratio)),
-                &case.models,
-                nve.dtv,
-            ),
+            params: at_dt(case.params),
+            wall_params: at_dt(case.wall_params),
             nve,
             bodies,
-            wall: case.wall.as_ref().map(|w| square_wall(w.z, w.half_size)),
+            wall: case.wall.map(|(z, half)| square_wall(z, half)),
             pair_hist: None,
             pair_touching: false,
             wall_hist: [None, None],
-            skin: contact_skin(case),
+            skin: contact_skin(case.bodies.iter().map(|b| b.radius)),
             xhold,
             step: 0,
         }

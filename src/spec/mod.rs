@@ -19,6 +19,8 @@ pub use stability::{hertz_collision, rayleigh_time, HertzCollision};
 pub use crate::solver::contact::models::{NormalModel, RollingModel, TangentialModel};
 
 use crate::error::{Error, Result};
+use crate::solver::material::{Coefficients, Elastic, PairParams};
+use crate::solver::two_body::{contact_skin, BodyMotion, BodySetup, TwoBody};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -92,6 +94,42 @@ impl Material {
             ));
         }
         Ok(())
+    }
+}
+
+impl Material {
+    /// The elastic constants the solver reads.
+    pub fn elastic(&self) -> Elastic {
+        Elastic {
+            youngs_modulus: self.youngs_modulus,
+            poisson_ratio: self.poisson_ratio,
+        }
+    }
+
+    /// The pair constants of this material with itself, at the time step `dt`.
+    pub fn pair_params(&self, models: &Models, dt: f64) -> PairParams {
+        self.pair_params_against(self.elastic(), models, dt)
+    }
+
+    /// The pair constants of a particle of this material against a body of elastic constants
+    /// `other` (a wall's own modulus): the pair coefficients are the material's for every
+    /// type pair, as the decks write them.
+    pub fn pair_params_against(&self, other: Elastic, models: &Models, dt: f64) -> PairParams {
+        let c = Coefficients {
+            restitution: self.restitution,
+            friction: self.friction,
+            rolling_friction: self.rolling_friction,
+            rolling_damping: self.rolling_damping,
+            rolling_stiffness: self.rolling_stiffness,
+        };
+        PairParams::between(
+            self.elastic(),
+            other,
+            c,
+            models.rolling,
+            models.torsion_torque,
+            dt,
+        )
     }
 }
 
@@ -195,6 +233,16 @@ pub struct WallMaterial {
     pub poisson_ratio: f64,
 }
 
+impl WallMaterial {
+    /// The elastic constants the solver reads.
+    pub fn elastic(&self) -> Elastic {
+        Elastic {
+            youngs_modulus: self.youngs_modulus,
+            poisson_ratio: self.poisson_ratio,
+        }
+    }
+}
+
 /// Checks Young's modulus and Poisson's ratio as LIGGGHTS requires them (E >= 5e6 Pa in SI,
 /// 0 <= nu < 0.5): the one rule for the particles' and a wall's elastic constants.
 pub fn check_elastic(prefix: &str, youngs_modulus: f64, poisson_ratio: f64) -> Result<()> {
@@ -256,6 +304,50 @@ impl std::ops::Deref for Case {
     type Target = CaseFile;
     fn deref(&self) -> &CaseFile {
         &self.file
+    }
+}
+
+impl Case {
+    /// The case as the two-body solver reads it (its own types: the pair constants at the
+    /// case's dt, the bodies and their motions, the wall).
+    pub fn two_body(&self) -> TwoBody {
+        let m = &self.material;
+        let wall = self.wall.as_ref();
+        let other = wall
+            .and_then(|w| w.material)
+            .map_or(m.elastic(), |w| w.elastic());
+        TwoBody {
+            dt: self.dt,
+            params: m.pair_params(&self.models, self.dt),
+            wall_params: m.pair_params_against(other, &self.models, self.dt),
+            density: m.density,
+            bodies: self
+                .particles
+                .iter()
+                .map(|p| BodySetup {
+                    x: p.position,
+                    v: p.velocity,
+                    omega: p.omega,
+                    radius: p.radius,
+                    motion: match p.motion {
+                        Motion::Free => BodyMotion::Free,
+                        Motion::Fixed => BodyMotion::Fixed,
+                        Motion::Rotate { omega } => BodyMotion::Rotate(omega),
+                        Motion::Linear { velocity } => BodyMotion::Linear(velocity),
+                    },
+                })
+                .collect(),
+            wall: wall.map(|w| (w.z, w.half_size)),
+            steps: self.steps,
+            output_every: self.output_every,
+            reverse_at_step: self.reverse_at_step,
+        }
+    }
+
+    /// The neighbour skin of the case (a quarter of the smallest radius), as the solver and
+    /// the deck use it.
+    pub fn skin(&self) -> f64 {
+        contact_skin(self.particles.iter().map(|p| p.radius))
     }
 }
 

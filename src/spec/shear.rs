@@ -4,6 +4,9 @@
 
 use super::{check_identifier, non_negative, positive, Material, Models, RollingModel};
 use crate::error::{Error, Result};
+use crate::solver::shear::plate::PlateShape;
+use crate::solver::shear::servo::ServoGains;
+use crate::solver::shear::ShearSetup;
 use serde::{Deserialize, Serialize};
 
 /// Most particles a shear box (and `verify bench`'s state) may hold: about 2.5 GB of solver
@@ -145,6 +148,20 @@ pub enum Plates {
 }
 
 impl Plates {
+    /// The plates' shape as the solver reads it, in a box of length `box_x`.
+    pub fn shape(&self, box_x: f64) -> PlateShape {
+        match *self {
+            Plates::Flat => PlateShape::flat(box_x),
+            Plates::Teeth {
+                tooth_height,
+                tooth_wavelength,
+            } => PlateShape {
+                tooth_height,
+                wavelength: tooth_wavelength,
+            },
+        }
+    }
+
     pub fn tooth_height(&self) -> f64 {
         match self {
             Plates::Flat => 0.0,
@@ -540,6 +557,29 @@ impl ShearCase {
     /// Target force on the top plate [N]: normal stress times the plate area.
     pub fn target_force(&self) -> f64 {
         self.normal_stress * self.box_x * self.box_z
+    }
+
+    /// The case as the shear solver reads it (its own types; the time loop never holds the
+    /// description).
+    pub fn setup(&self) -> ShearSetup {
+        ShearSetup {
+            dt: self.dt,
+            box_x: self.box_x,
+            box_z: self.box_z,
+            skin: self.skin,
+            rebuild_every: self.neighbor.every,
+            rebuild_check: self.neighbor.check,
+            plate: self.plates.shape(self.box_x),
+            servo: ServoGains {
+                vel_max: self.servo.vel_max,
+                kp: self.servo.kp,
+                ki: self.servo.ki,
+                kd: self.servo.kd,
+            },
+            target_force: self.target_force(),
+            density: self.material.density,
+            params: self.material.pair_params(&self.models, self.dt),
+        }
     }
 
     /// Steps of each shear stage.

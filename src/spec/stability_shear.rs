@@ -75,7 +75,7 @@ pub fn stability(case: &ShearCase) -> StabilityReport {
     use crate::solver::contact::rolling::{pair_reff, pair_rolling_inertia, wall_rolling_inertia};
     let m = &case.material;
     // E* = Yeff and G* = Geff of the material with itself, as the kernels use them
-    let pp = crate::solver::material::PairParams::new(m, &case.models, case.dt);
+    let pp = m.pair_params(&case.models, case.dt);
     let (e_star, g_star) = (pp.y_eff, pp.g_eff);
     let dt = case.dt;
     let mass = |r: f64| crate::solver::material::sphere_mass(r, m.density);

@@ -202,7 +202,7 @@ pub fn run(req: &ReplayRequest, lig: &Liggghts, progress: impl Fn(&str)) -> Resu
             )
         })
     };
-    let mut sim = ShearSim::new(&case, &packing);
+    let mut sim = ShearSim::new(&case.setup(), &packing);
     let ntri = sim.triangle_counts();
     let ends = case.run_ends();
     let mut results = Vec::new();

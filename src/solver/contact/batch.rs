@@ -94,13 +94,13 @@ pub fn pair<L: Lanes>(a: &PairIn<L>, p: &PairParams, update_history: bool) -> Pa
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::{material, params};
+    use super::super::test_support::{params, DENSITY};
     use super::*;
     use crate::solver::contact::models::RollingModel;
     use crate::solver::material::sphere_mass;
 
     fn input(gap: f64) -> PairIn<f64> {
-        let m = sphere_mass(1e-4, material().density);
+        let m = sphere_mass(1e-4, DENSITY);
         PairIn {
             xi: [0.0, 0.0, 2e-4 + gap],
             xj: [0.3, 0.0, 0.0],

@@ -429,30 +429,24 @@ mod history_tests {
 #[cfg(test)]
 pub(crate) mod test_support {
     use super::*;
-    use crate::solver::contact::models::{NormalModel, TangentialModel};
-    use crate::spec::{Material, Models};
+    use crate::solver::material::{Coefficients, Elastic};
 
-    pub fn material() -> Material {
-        Material {
+    /// Particle density [kg/m^3] of the test material.
+    pub const DENSITY: f64 = 2500.0;
+
+    pub fn params(rolling: RollingModel) -> PairParams {
+        let glass = Elastic {
             youngs_modulus: 7.0e10,
             poisson_ratio: 0.3,
-            density: 2500.0,
+        };
+        let c = Coefficients {
             restitution: 0.5,
             friction: 0.5,
             rolling_friction: 0.5,
             rolling_damping: 0.3,
             rolling_stiffness: 3.0,
-        }
-    }
-
-    pub fn params(rolling: RollingModel) -> PairParams {
-        let models = Models {
-            normal: NormalModel::Hertz,
-            tangential: TangentialModel::History,
-            rolling,
-            torsion_torque: false,
         };
-        PairParams::new(&material(), &models, 1e-8)
+        PairParams::between(glass, glass, c, rolling, false, 1e-8)
     }
 
     /// The sphere i of [`pair`] touching a wall below it instead, with the overlap

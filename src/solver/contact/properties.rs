@@ -3,7 +3,7 @@
 //! angular momentum, invariance under translation and rotation of the whole contact, and the
 //! Coulomb and rolling caps.
 
-use super::test_support::{material, params};
+use super::test_support::{params, DENSITY};
 use super::*;
 use crate::solver::material::sphere_mass;
 use crate::solver::vec3::{cross, dot};
@@ -97,7 +97,7 @@ fn eval(
     let xj = add(f(s.xj), t);
     let xi = add(xj, f([n[0] * dist, n[1] * dist, n[2] * dist]));
     let delta = [xi[0] - xj[0], xi[1] - xj[1], xi[2] - xj[2]];
-    let rho = material().density;
+    let rho = DENSITY;
     let mut cd = ContactData::pair(
         delta,
         dot(delta, delta),

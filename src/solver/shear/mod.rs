@@ -19,10 +19,14 @@ pub mod plate;
 mod rebuild;
 pub mod replay;
 pub mod servo;
+mod setup;
+pub mod state;
 mod walls;
 
 pub use observe::{PlateRecord, Snapshot};
 pub use pairs::KernelPath;
+pub use setup::ShearSetup;
+pub use state::Packing;
 
 use super::contact::{moved_beyond_half_skin, pair_geometry, ContactData, ForceData};
 use super::integrate::{Kick, NveSphere};
@@ -31,8 +35,6 @@ use super::team::{bounds, split_mut, Team};
 use super::trimesh::{TriContactRecord, TriMesh};
 use super::vec3::V3;
 use crate::error::{Error, Result};
-use crate::packing::Packing;
-use crate::spec::shear::ShearCase;
 use implicit::add_dashpot;
 use neighbor::{NeighborList, Periodic};
 use plate::{plate_triangles, Plate, Side};
@@ -112,18 +114,22 @@ struct PairDamp {
     en: V3,
 }
 
-/// The shear box state and time loop. The time step is read from `case.dt` once, in
-/// [`ShearSim::new`], into `nve` (fix nve/sphere's `dtv`, `dtf`, `dtfrotate`); every later
-/// use reads `nve.dtv`: the drift, the rotation, the bottom plate, the servo (which keeps
-/// none), and the contact kernels through `params.dt`, set from it (LIGGGHTS' models read
-/// `update->dt`).
+/// The shear box state and time loop, built from its own constants ([`ShearSetup`], made
+/// from a case by `spec::shear::ShearCase::setup`). The time step is read from `setup.dt`
+/// once, in [`ShearSim::new`], into `nve` (fix nve/sphere's `dtv`, `dtf`, `dtfrotate`), the
+/// one time step it holds; every later use reads `nve.dtv`: the drift, the rotation, the
+/// bottom plate, the servo (which keeps none), and the contact kernels through `params.dt`,
+/// set from it (LIGGGHTS' models read `update->dt`).
 ///
 /// Serialisable whole (every field but the phase clock and the kernel choice, which the
 /// reading machine makes again): a checkpoint is this struct, so a resumed run continues from
 /// exactly the state, scratch buffers included, that the uninterrupted run would have.
 #[derive(Clone, serde::Serialize, serde::Deserialize)]
 pub struct ShearSim {
-    case: ShearCase,
+    /// Neighbour skin [m] and the rebuild schedule ([`ShearSetup`]'s).
+    skin: f64,
+    rebuild_every: u64,
+    rebuild_check: bool,
     params: PairParams,
     nve: NveSphere,
     box_: Periodic,
@@ -264,14 +270,14 @@ struct PhaseClock {
 
 impl ShearSim {
     /// The initial state from a generated packing (both codes read the same data).
-    pub fn new(case: &ShearCase, packing: &Packing) -> Self {
+    pub fn new(case: &ShearSetup, packing: &Packing) -> Self {
         let n = packing.radius.len();
-        let rho = case.material.density;
+        let rho = case.density;
         // radius = 0.5 * diameter as read_data computes it; mass as atom_vec_sphere does.
         let radius: Vec<f64> = packing.radius.iter().map(|r| 0.5 * (2.0 * r)).collect();
         let mass: Vec<f64> = radius.iter().map(|r| sphere_mass(*r, rho)).collect();
-        let bottom = Plate::new(Side::Bottom, 0.0, &case.plates, case.box_x);
-        let top = Plate::new(Side::Top, packing.top_y, &case.plates, case.box_x);
+        let bottom = Plate::new(Side::Bottom, 0.0, case.plate, case.box_x);
+        let top = Plate::new(Side::Top, packing.top_y, case.plate, case.box_x);
         let lo = [0.0, packing.box_y_lo, 0.0];
         let hi = [case.box_x, packing.box_y_hi, case.box_z];
         let meshes = [
@@ -287,9 +293,14 @@ impl ShearSim {
             .map(|(r, m)| nve.kick(*r, *m))
             .collect();
         ShearSim {
-            case: case.clone(),
+            skin: case.skin,
+            rebuild_every: case.rebuild_every,
+            rebuild_check: case.rebuild_check,
             // the one time step: nve/sphere's dtv; the kernels' copy is set from it here
-            params: PairParams::new(&case.material, &case.models, nve.dtv),
+            params: PairParams {
+                dt: nve.dtv,
+                ..case.params
+            },
             nve,
             box_: Periodic {
                 lx: case.box_x,
@@ -314,14 +325,14 @@ impl ShearSim {
             packed_current: false,
             pair_state: Vec::new(),
             pair_damp: Vec::new(),
-            imp: if case.models.rolling
+            imp: if case.params.rolling
                 == crate::solver::contact::models::RollingModel::EpsdImplicit
             {
                 vec![([0.0; 6], [0.0; 3]); n]
             } else {
                 Vec::new()
             },
-            implicit: case.models.rolling
+            implicit: case.params.rolling
                 == crate::solver::contact::models::RollingModel::EpsdImplicit,
             wall: vec![WallSlots::default(); n],
             wall_force: vec![([0.0; 3], [0.0; 3]); n],
@@ -332,7 +343,7 @@ impl ShearSim {
             bottom,
             top,
             top_base0: packing.top_y,
-            servo: Servo::new(&case.servo, case.target_force(), com),
+            servo: Servo::new(case.servo, case.target_force, com),
             bottom_speed: 0.0,
             bottom_node_v: 0.0,
             shear_displacement: 0.0,
@@ -436,7 +447,7 @@ impl ShearSim {
             self.pack_all(&team);
         }
         let (kick, f, torque) = (&self.kick[..], &self.f[..], &self.torque[..]);
-        let (xhold, skin) = (&self.xhold[..], self.case.skin);
+        let (xhold, skin) = (&self.xhold[..], self.skin);
         // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
         // (some atom moved more than skin/2 since the last build); each share's inputs as
         // slices of its own (no bounds check or reload of an array's address per particle)
@@ -935,7 +946,7 @@ fn too_many_wall_contacts(step: u64) -> Error {
 /// The dense state after `steps` compression steps of `case` from `loose` (plates still, the
 /// servo pressing the top plate), as the initial state of new runs: what `verify convergence`
 /// shares between its dt and codes, and what `verify bench` times from.
-pub fn compact(case: &ShearCase, loose: &Packing, steps: u64) -> Result<Packing> {
+pub fn compact(case: &ShearSetup, loose: &Packing, steps: u64) -> Result<Packing> {
     let mut sim = ShearSim::new(case, loose);
     sim.setup(0.0)?;
     for _ in 0..steps {
@@ -969,6 +980,7 @@ mod tests {
     use super::*;
     use crate::packing::loose_packing;
     use crate::solver::contact::models::RollingModel;
+    use crate::spec::shear::ShearCase;
 
     /// A particle's plate records survive the checkpoint form (a count and 8 fixed slots)
     /// unchanged, in order, and a record count beyond 8 is not read past the slots.
@@ -1026,12 +1038,12 @@ mod tests {
         // one dense packing (the preset's whole compression) for both models
         let c = preset(RollingModel::Epsd);
         assert_eq!(c.particles, 2500);
-        let dense = compact(&c, &loose_packing(&c), c.compression_steps).unwrap();
+        let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
         for model in [RollingModel::Epsd, RollingModel::EpsdImplicit] {
             let c = preset(model);
             let run = |threads: usize| {
                 crate::solver::team::on_threads(threads, || {
-                    let mut s = ShearSim::new(&c, &dense);
+                    let mut s = ShearSim::new(&c.setup(), &dense);
                     s.setup(c.stages[0].speed).unwrap();
                     for _ in 0..1500 {
                         s.step().unwrap();
@@ -1076,7 +1088,7 @@ mod tests {
         .unwrap();
         c.particles = 120;
         let p = loose_packing(&c);
-        let mut s = ShearSim::new(&c, &p);
+        let mut s = ShearSim::new(&c.setup(), &p);
         s.setup(0.0).unwrap();
         s.v[7] = [0.0, 1e12, 0.0];
         let mut err = None;

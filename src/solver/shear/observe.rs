@@ -2,9 +2,9 @@
 //! energies, rolling mobilisation), particle snapshots, the state handed to a new run, and the
 //! checks made at output steps.
 
+use super::state::Packing;
 use super::{neighbor, PairContact, ShearSim};
 use crate::error::{Error, Result};
-use crate::packing::Packing;
 use rayon::prelude::*;
 
 /// One output record (SI units).
@@ -44,7 +44,7 @@ pub struct Snapshot {
 impl ShearSim {
     /// Current sample height: distance between the plates' mean surfaces [m].
     pub fn height(&self) -> f64 {
-        self.top.base_y - self.bottom.base_y - self.case.plates.tooth_height()
+        self.top.base_y - self.bottom.base_y - self.bottom.tooth_height
     }
 
     pub fn record(&self) -> PlateRecord {

@@ -13,8 +13,6 @@
 //! centre to the closest point, the wall contact uses LIGGGHTS' quantities:
 //! `deltan = d - r`, `sidata.delta = -delta`, `r_c = r - overlap`, `en = -delta / r_c`.
 
-use crate::spec::shear::Plates;
-
 /// Which plate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Side {
@@ -49,22 +47,35 @@ pub struct FeatureContact {
     pub delta: [f64; 3],
 }
 
+/// The shape both plates share: a triangle wave of teeth along x, or flat (no height, one
+/// face over the box).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PlateShape {
+    /// Tooth height [m] (0: flat).
+    pub tooth_height: f64,
+    /// Tooth period along x [m] (box_x for flat plates).
+    pub wavelength: f64,
+}
+
+impl PlateShape {
+    /// A flat plate over a box of length `box_x`.
+    pub fn flat(box_x: f64) -> Self {
+        PlateShape {
+            tooth_height: 0.0,
+            wavelength: box_x,
+        }
+    }
+}
+
 impl Plate {
-    pub fn new(side: Side, base_y: f64, plates: &Plates, box_x: f64) -> Self {
-        let (h, w) = match plates {
-            Plates::Flat => (0.0, box_x),
-            Plates::Teeth {
-                tooth_height,
-                tooth_wavelength,
-            } => (*tooth_height, *tooth_wavelength),
-        };
+    pub fn new(side: Side, base_y: f64, shape: PlateShape, box_x: f64) -> Self {
         Plate {
             side,
             base_y,
             offset_x: 0.0,
-            tooth_height: h,
-            wavelength: w,
-            n_teeth: (box_x / w).round() as usize,
+            tooth_height: shape.tooth_height,
+            wavelength: shape.wavelength,
+            n_teeth: (box_x / shape.wavelength).round() as usize,
             box_x,
         }
     }
@@ -183,16 +194,16 @@ pub fn plate_triangles(plate: &Plate, box_z: f64) -> Vec<[[f64; 3]; 3]> {
 mod tests {
     use super::*;
 
-    fn teeth() -> Plates {
-        Plates::Teeth {
+    fn teeth() -> PlateShape {
+        PlateShape {
             tooth_height: 0.2,
-            tooth_wavelength: 1.0,
+            wavelength: 1.0,
         }
     }
 
     #[test]
     fn sphere_on_a_face_touches_one_feature() {
-        let p = Plate::new(Side::Bottom, 0.0, &teeth(), 4.0);
+        let p = Plate::new(Side::Bottom, 0.0, teeth(), 4.0);
         let mut out = Vec::new();
         // above the middle of the rising face of tooth 1 (x in [1, 1.5]), close to it
         p.contacts([1.25, 0.1 + 0.05, 0.3], 0.06, &mut out);
@@ -203,7 +214,7 @@ mod tests {
 
     #[test]
     fn sphere_above_a_tip_touches_the_ridge_and_in_a_valley_two_faces() {
-        let p = Plate::new(Side::Bottom, 0.0, &teeth(), 4.0);
+        let p = Plate::new(Side::Bottom, 0.0, teeth(), 4.0);
         let mut out = Vec::new();
         p.contacts([2.5, 0.25, 0.0], 0.1, &mut out);
         assert_eq!(out.iter().map(|c| c.id % 3).collect::<Vec<_>>(), vec![2]);
@@ -219,13 +230,13 @@ mod tests {
 
     #[test]
     fn offset_moves_the_teeth_and_top_plate_points_down() {
-        let mut p = Plate::new(Side::Bottom, 0.0, &teeth(), 4.0);
+        let mut p = Plate::new(Side::Bottom, 0.0, teeth(), 4.0);
         p.offset_x = 0.5;
         let mut out = Vec::new();
         p.contacts([1.0, 0.25, 0.0], 0.1, &mut out); // tip now at x = 1.0
         assert_eq!(out.len(), 1);
         assert_eq!(out[0].id % 3, 2);
-        let t = Plate::new(Side::Top, 1.0, &teeth(), 4.0);
+        let t = Plate::new(Side::Top, 1.0, teeth(), 4.0);
         out.clear();
         t.contacts([0.5, 0.75, 0.0], 0.1, &mut out);
         assert_eq!(out.len(), 1);

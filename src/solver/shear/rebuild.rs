@@ -23,14 +23,13 @@ impl ShearSim {
             return true;
         }
         self.ago += 1;
-        let sched = &self.case.neighbor;
-        self.ago.is_multiple_of(sched.every) && (!sched.check || particles_moved)
+        self.ago.is_multiple_of(self.rebuild_every) && (!self.rebuild_check || particles_moved)
     }
 
     /// `MultiNodeMesh::decideRebuild` for both plates: a node moved more than skin/2 since the
     /// last build (every node of a plate moves by the same vector).
     pub(super) fn plates_moved(&self) -> bool {
-        let trigger = 0.5 * self.case.skin;
+        let trigger = 0.5 * self.skin;
         (self.bottom.offset_x - self.bottom_hold).abs() > trigger
             || (self.top.base_y - self.top_hold).abs() > trigger
     }
@@ -57,7 +56,7 @@ impl ShearSim {
             }
         }
         self.nl
-            .build(&team, &self.x, &self.radius, self.case.skin, self.box_);
+            .build(&team, &self.x, &self.radius, self.skin, self.box_);
         self.rebuild_plates();
         self.build_wall_candidates(&team);
         self.xhold.clone_from(&self.x);
@@ -132,7 +131,7 @@ impl ShearSim {
     /// found and the order their forces are summed in are unchanged: bitwise the same
     /// results, fewer sphere-triangle tests per step.
     pub(super) fn build_wall_candidates(&mut self, team: &Team) {
-        let (lx, lz, skin) = (self.box_.lx, self.box_.lz, self.case.skin);
+        let (lx, lz, skin) = (self.box_.lx, self.box_.lz, self.skin);
         let meshes = &self.meshes;
         let y_range: Vec<(f64, f64)> = meshes
             .iter()
@@ -301,7 +300,7 @@ mod tests {
 
     fn windowed_candidates_in(case: &ShearCase) {
         let pk = loose_packing(case);
-        let mut sim = ShearSim::new(case, &pk);
+        let mut sim = ShearSim::new(&case.setup(), &pk);
         let team = Team::new(2);
         let (lx, lz, skin) = (case.box_x, case.box_z, case.skin);
         for dx in [0.0, 0.37 * lx, 0.91 * lx] {

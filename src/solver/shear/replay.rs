@@ -86,7 +86,7 @@ impl ShearSim {
     /// One step of the plates and the neighbour schedule only, the top plate's servo fed
     /// `top_force` (the force of the particles on it at this step, as LIGGGHTS printed it).
     pub fn step_plates_only(&mut self, top_force: V3) -> Result<()> {
-        if self.case.neighbor.check {
+        if self.rebuild_check {
             return Err(Error::invalid(
                 "neighbor.check",
                 true,
@@ -181,7 +181,7 @@ impl ShearSim {
         let builds = self.nl.builds;
         let team = self.team();
         self.nl
-            .build(&team, &self.x, &self.radius, self.case.skin, self.box_);
+            .build(&team, &self.x, &self.radius, self.skin, self.box_);
         self.nl.builds = builds;
         let mut used = 0usize;
         for (p, ph) in self.nl.pairs.iter().zip(self.nl.hist.iter_mut()) {

@@ -10,7 +10,16 @@
 //!   `|vcm|` is limited to vel_max, with the anti-windup reset
 //!   `sum = (-sgn(vcm . axis) sp - err kp) / ki` when ki > 0.
 
-use crate::spec::shear::Servo as ServoSpec;
+/// The servo's gains (`vel_max`, `kp`, `ki`, `kd` of `fix mesh/surface/stress/servo`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ServoGains {
+    /// Maximum plate speed [m/s].
+    pub vel_max: f64,
+    /// Proportional gain (speed = kp vel_max at 100 % force error).
+    pub kp: f64,
+    pub ki: f64,
+    pub kd: f64,
+}
 
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Servo {
@@ -29,7 +38,7 @@ pub struct Servo {
 }
 
 impl Servo {
-    pub fn new(spec: &ServoSpec, target_force: f64, com: [f64; 3]) -> Self {
+    pub fn new(spec: ServoGains, target_force: f64, com: [f64; 3]) -> Self {
         let sp = -target_force;
         Servo {
             axis: [0.0, -1.0, 0.0],
@@ -103,13 +112,13 @@ mod tests {
 
     #[test]
     fn plate_moves_down_when_underloaded_and_up_when_overloaded() {
-        let spec = ServoSpec {
+        let spec = ServoGains {
             vel_max: 1.0,
             kp: 0.5,
             ki: 0.0,
             kd: 0.0,
         };
-        let mut s = Servo::new(&spec, 100.0, [0.0, 1.0, 0.0]);
+        let mut s = Servo::new(spec, 100.0, [0.0, 1.0, 0.0]);
         let dt = 1e-3;
         s.final_integrate([0.0, 0.0, 0.0], dt); // no force: full error
         assert!((s.vcm[1] + 0.5).abs() < 1e-15, "{:?}", s.vcm);

@@ -16,7 +16,7 @@ fn sheared(model: RollingModel, e: f64, eta: f64) -> ShearSim {
         .unwrap()
         .with_restitution("e", e)
         .unwrap();
-    let mut s = ShearSim::new(&c, &loose_packing(&c));
+    let mut s = ShearSim::new(&c.setup(), &loose_packing(&c));
     s.setup(0.0).unwrap();
     for _ in 0..c.compression_steps {
         s.step().unwrap();
@@ -202,7 +202,7 @@ fn pass_on(s: &ShearSim, ids: &[usize], path: KernelPath) -> (NeighborList, Vec<
     let (x, v, omega, radius, mass) =
         (g3(&s.x), g3(&s.v), g3(&s.omega), g1(&s.radius), g1(&s.mass));
     let mut nl = NeighborList::default();
-    nl.build(&team, &x, &radius, s.case.skin, s.box_);
+    nl.build(&team, &x, &radius, s.skin, s.box_);
     let key = |a: usize, b: usize| (a.min(b), a.max(b));
     let before: std::collections::BTreeMap<_, _> =
         s.nl.pairs
@@ -281,7 +281,7 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
     let n = base.x.len();
     let all: Vec<usize> = (0..n).collect();
     let rmax = base.radius.iter().cloned().fold(0.0, f64::max);
-    let cut = 2.0 * rmax + base.case.skin;
+    let cut = 2.0 * rmax + base.skin;
     for path in KernelPath::available() {
         let (gnl, gacc) = pass_on(&base, &all, path);
         let gkey = |p: &Pair| (p.i.min(p.j) as usize, p.i.max(p.j) as usize);
