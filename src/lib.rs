@@ -18,6 +18,7 @@ pub mod liggghts;
 pub mod packing;
 pub mod profile;
 pub mod report;
+pub mod rotation_map;
 pub mod run;
 pub mod series;
 pub mod shear;

@@ -351,7 +351,7 @@ pub fn run_native(
     }
     progress.finish();
     // the paper's rotation map of the final state (rotations accumulated over the whole run)
-    crate::report::rotation::rotation_map(
+    crate::rotation_map::rotation_map(
         &out.join("rotation_map.svg"),
         &format!(
             "native, mu_r {}, eta_r {}, seed {}: accumulated rotation at step {}",

@@ -8,7 +8,6 @@ pub mod nightly;
 pub mod paper;
 pub mod plot;
 pub mod replay;
-pub mod rotation;
 pub mod shear;
 pub mod sweep;
 

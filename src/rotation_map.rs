@@ -2,14 +2,19 @@
 //! of its radius at (x wrapped into the periodic box, y), coloured by the magnitude of its
 //! accumulated rotation (the integral of omega dt since the start of the run) with a colour bar,
 //! and the plates' profiles. Written by the native solver at the end of each run
-//! (`seedN/rotation_map.svg`); LIGGGHTS' dumps do not integrate rotations.
+//! (`seedN/rotation_map.svg`), an output of the run as its ParaView snapshots are
+//! ([`crate::vtk`]); LIGGGHTS' dumps do not integrate rotations.
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::report::bars::draw_err;
 use crate::solver::shear::Snapshot;
 use plotters::prelude::*;
 use std::path::Path;
+
+/// A drawing error of the in-memory SVG.
+fn draw_err(e: impl std::fmt::Display) -> Error {
+    Error::io("(SVG in memory)", std::io::Error::other(e.to_string()))
+}
 
 /// Colour of a rotation on the scale 0 ..= `hi` [rad]: white, through orange, to dark red.
 fn color(v: f64, hi: f64) -> RGBColor {
