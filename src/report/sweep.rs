@@ -233,6 +233,59 @@ fn judge(points: &[Point], stand_ins: &[Point]) -> Vec<JudgedPoint> {
         .collect()
 }
 
+/// The sweep's points and the paper's conclusions, as run and as judged on stable or
+/// converged numbers.
+struct Judgement {
+    points: Vec<Point>,
+    conv_points: Vec<Point>,
+    /// Each point as judged: stable as it is, by its stand-in, or left out.
+    judged_points: Vec<JudgedPoint>,
+    judged: Vec<Point>,
+    codes: Vec<Code>,
+    concl: Vec<(Code, Vec<Conclusion>)>,
+    conv_concl: Vec<(Code, Vec<Conclusion>)>,
+}
+
+impl Judgement {
+    fn new(points: Vec<Point>, conv_points: Vec<Point>) -> Self {
+        let codes: Vec<Code> = {
+            let mut c: Vec<Code> = points.iter().map(|p| p.code).collect();
+            c.dedup();
+            c
+        };
+        let concl: Vec<(Code, Vec<Conclusion>)> = codes
+            .iter()
+            .map(|&c| (c, conclusions(&points, c)))
+            .collect();
+        // the conclusions judged on trustworthy numbers: each point where the explicit
+        // dashpot is stable as it is, each unstable point by its stand-in, unstable points
+        // without one left out (and said so)
+        let judged_points = judge(&points, &conv_points);
+        let judged: Vec<Point> = judged_points
+            .iter()
+            .filter_map(|j| j.point.clone())
+            .collect();
+        let conv_concl: Vec<(Code, Vec<Conclusion>)> = if conv_points.is_empty() {
+            Vec::new()
+        } else {
+            codes
+                .iter()
+                .filter(|c| judged.iter().any(|p| p.code == **c))
+                .map(|&c| (c, conclusions(&judged, c)))
+                .collect()
+        };
+        Judgement {
+            points,
+            conv_points,
+            judged_points,
+            judged,
+            codes,
+            concl,
+            conv_concl,
+        }
+    }
+}
+
 /// The paper's figures, the conclusions and a report page from DIR's (current) results.
 pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     let m = Manifest::load(&dir.join("manifest.json"))?;
@@ -243,40 +296,81 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             dir.display()
         )));
     }
-    let points = sweep_points(&m, &results, "");
     let mut conv_points = Vec::new();
     for c in converged {
         conv_points.extend(converged_points(c)?);
     }
-    let codes: Vec<Code> = {
-        let mut c: Vec<Code> = points.iter().map(|p| p.code).collect();
-        c.dedup();
-        c
-    };
-    let concl: Vec<(Code, Vec<Conclusion>)> = codes
-        .iter()
-        .map(|&c| (c, conclusions(&points, c)))
-        .collect();
-    // the conclusions judged on trustworthy numbers: each point where the explicit dashpot is
-    // stable as it is, each unstable point by its stand-in, unstable points without one left
-    // out (and said so)
-    let judged_points = judge(&points, &conv_points);
-    let judged: Vec<Point> = judged_points
-        .iter()
-        .filter_map(|j| j.point.clone())
-        .collect();
-    let conv_concl: Vec<(Code, Vec<Conclusion>)> = if conv_points.is_empty() {
-        Vec::new()
-    } else {
-        codes
-            .iter()
-            .filter(|c| judged.iter().any(|p| p.code == **c))
-            .map(|&c| (c, conclusions(&judged, c)))
-            .collect()
-    };
-    let figs = dir.join("figures");
+    let j = Judgement::new(sweep_points(&m, &results, ""), conv_points);
     let mut page = Page::new("DEM sweep: the paper's parametric study");
     page.push(html! { h1 { "Parametric study: steady friction over (mu_r, eta_r)" } });
+    let (wall_l, wall_n) = meta(&mut page, &m, &results, dir);
+    if !missing.is_empty() {
+        page.push(html! { p.warn {
+            (missing.len()) " runs have no result yet: the figures show what exists."
+        } });
+    }
+    page.heading("bottom-line", "Bottom line");
+    bottom_line(&mut page, &j);
+    page.heading("conclusions", "The paper's conclusions, checked");
+    conclusions_section(&mut page, &j);
+    unstable_note(&mut page, &j.points);
+    page.heading("figures", "Figures");
+    let figs = dir.join("figures");
+    let mut fig_html = mu_against_mu_r(&mut page, &j, &figs)?;
+    fig_html.extend(mu_against_speed(&mut page, &j, &figs)?);
+    fig_html.extend(heat_maps(&mut page, &j, &figs)?);
+    page.figures(&fig_html);
+    convergence_figures(&mut page, converged)?;
+    rotation_maps(&mut page, &m, dir);
+    points_table(&mut page, &j);
+    write_atomic(&dir.join("report.html"), page.finish().as_bytes())?;
+    let Judgement {
+        points,
+        conv_points,
+        judged_points,
+        concl,
+        conv_concl,
+        ..
+    } = j;
+    let rep = SweepReport {
+        schema: crate::run::SCHEMA,
+        points,
+        conclusions: concl,
+        converged_points: conv_points,
+        converged_conclusions: conv_concl,
+        judged: judged_points,
+        runs: results.len(),
+        run_wall_s_liggghts: wall_l,
+        run_wall_s_native: wall_n,
+    };
+    write_atomic(
+        &dir.join("report.json"),
+        serde_json::to_string_pretty(&rep)?.as_bytes(),
+    )?;
+    crate::run::note_summary(&dir.join("report.json"));
+    for (code, cs) in rep.conclusions.iter().chain(&rep.converged_conclusions) {
+        for c in cs {
+            println!("  {code}: {} -> {} ({})", c.claim, c.verdict, c.evidence);
+        }
+    }
+    println!("report: {}", dir.join("report.html").display());
+    if !missing.is_empty() {
+        // the page is written (it shows what exists), but an incomplete sweep is not a
+        // finished report: say so where scripts look, in the exit status
+        return Err(Error::Cases(format!(
+            "the report is partial: {} of {} runs have no current result (indices {}); run \
+             them (rerun the sweep command, or `verify sweep run-one`) and report again",
+            missing.len(),
+            m.runs.len(),
+            crate::run::sweep::indices(&missing)
+        )));
+    }
+    Ok(())
+}
+
+/// The page's first line: runs done, preset, model, wall times; returns the summed wall
+/// times (LIGGGHTS, native) [s].
+fn meta(page: &mut Page, m: &Manifest, results: &[RunResult], dir: &Path) -> (f64, f64) {
     let wall_l: f64 = results.iter().filter_map(|r| r.liggghts_wall_s).sum();
     let wall_n: f64 = results.iter().filter_map(|r| r.native_wall_s).sum();
     let inv: Option<serde_json::Value> = std::fs::read_to_string(dir.join("last_invocation.json"))
@@ -312,73 +406,75 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         ))
         .unwrap_or_default()
     )) } });
-    if !missing.is_empty() {
-        page.push(html! { p.warn {
-            (missing.len()) " runs have no result yet: the figures show what exists."
-        } });
-    }
-    page.heading("bottom-line", "Bottom line");
-    {
-        let mut rows: Vec<Vec<(String, &str)>> = Vec::new();
-        let class = |v: ClaimVerdict| match v {
-            ClaimVerdict::Agrees => "pass",
-            ClaimVerdict::Disagrees => "fail",
-            _ => "warn",
-        };
-        for (code, cs) in &concl {
-            let conv = conv_concl.iter().find(|(c, _)| c == code).map(|c| &c.1);
-            for (k, c) in cs.iter().enumerate() {
-                let j = conv.and_then(|v| v.get(k));
-                rows.push(vec![
-                    (format!("{code}"), ""),
-                    (c.claim.clone(), ""),
-                    (c.verdict.words().to_string(), class(c.verdict)),
-                    j.map_or(
-                        ("no stable or converged results given".into(), "warn"),
-                        |j| (j.verdict.words().to_string(), class(j.verdict)),
-                    ),
-                    (j.map_or(c.evidence.clone(), |j| j.evidence.clone()), ""),
-                ]);
-            }
+    (wall_l, wall_n)
+}
+
+/// The bottom line: each claim as run and on stable or converged numbers, and which points
+/// were judged on a stand-in.
+fn bottom_line(page: &mut Page, j: &Judgement) {
+    let mut rows: Vec<Vec<(String, &str)>> = Vec::new();
+    let class = |v: ClaimVerdict| match v {
+        ClaimVerdict::Agrees => "pass",
+        ClaimVerdict::Disagrees => "fail",
+        _ => "warn",
+    };
+    for (code, cs) in &j.concl {
+        let conv = j.conv_concl.iter().find(|(c, _)| c == code).map(|c| &c.1);
+        for (k, c) in cs.iter().enumerate() {
+            let jc = conv.and_then(|v| v.get(k));
+            rows.push(vec![
+                (format!("{code}"), ""),
+                (c.claim.clone(), ""),
+                (c.verdict.words().to_string(), class(c.verdict)),
+                jc.map_or(
+                    ("no stable or converged results given".into(), "warn"),
+                    |c| (c.verdict.words().to_string(), class(c.verdict)),
+                ),
+                (jc.map_or(c.evidence.clone(), |c| c.evidence.clone()), ""),
+            ]);
         }
-        page.push(table(
-            &[
-                "code",
-                "the paper's claim",
-                "at the sweep's dt (as the paper ran it)",
-                "on stable or converged numbers",
-                "evidence (stable or converged numbers where given)",
-            ],
-            &text_rows(rows),
-        ));
-        let missing_judged: Vec<String> = judged_points
-            .iter()
-            .filter(|j| j.point.is_none())
-            .map(|j| format!("{} (mu_r {}, eta_r {})", j.code, j.mu_r, j.eta_r))
-            .collect();
-        let substituted = judged_points.iter().filter(|j| j.substituted).count();
-        page.para(&format!(
-            "{} of {} points are unstable at the sweep's dt; {substituted} of them are judged on \
-             a stand-in (its source and checks in the table){}.",
-            points.iter().filter(|p| !p.dashpot_stable).count(),
-            points.len(),
-            if missing_judged.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; without one, left out of the judgement: {}",
-                    missing_judged.join(", ")
-                )
-            }
-        ));
     }
-    page.heading("conclusions", "The paper's conclusions, checked");
+    page.push(table(
+        &[
+            "code",
+            "the paper's claim",
+            "at the sweep's dt (as the paper ran it)",
+            "on stable or converged numbers",
+            "evidence (stable or converged numbers where given)",
+        ],
+        &text_rows(rows),
+    ));
+    let missing_judged: Vec<String> = j
+        .judged_points
+        .iter()
+        .filter(|j| j.point.is_none())
+        .map(|j| format!("{} (mu_r {}, eta_r {})", j.code, j.mu_r, j.eta_r))
+        .collect();
+    let substituted = j.judged_points.iter().filter(|j| j.substituted).count();
+    page.para(&format!(
+        "{} of {} points are unstable at the sweep's dt; {substituted} of them are judged on \
+         a stand-in (its source and checks in the table){}.",
+        j.points.iter().filter(|p| !p.dashpot_stable).count(),
+        j.points.len(),
+        if missing_judged.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; without one, left out of the judgement: {}",
+                missing_judged.join(", ")
+            )
+        }
+    ));
+}
+
+/// The paper's conclusions, checked: at the sweep's dt and on stable or converged numbers.
+fn conclusions_section(page: &mut Page, j: &Judgement) {
     for (title, set) in [
-        ("at the sweep's dt", &concl),
+        ("at the sweep's dt", &j.concl),
         (
             "on stable or converged-dt results: unstable points replaced by their converged \
              result, those without one left out",
-            &conv_concl,
+            &j.conv_concl,
         ),
     ] {
         for (code, cs) in set.iter() {
@@ -414,6 +510,10 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             }
         }
     }
+}
+
+/// Where the explicit rolling dashpot is expected to be unstable, and how to judge it.
+fn unstable_note(page: &mut Page, points: &[Point]) {
     let unstable: Vec<String> = points
         .iter()
         .filter(|p| !p.dashpot_stable && p.stage == 0)
@@ -432,8 +532,10 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             unstable.join(", ")
         ));
     }
-    page.heading("figures", "Figures");
-    let mut fig_html = Vec::new();
+}
+
+/// The stages (index, speed), the eta_r and the mu_r of the points, each sorted.
+fn axes(points: &[Point]) -> (Vec<(usize, f64)>, Vec<f64>, Vec<f64>) {
     let stages: Vec<(usize, f64)> = {
         let mut s: Vec<(usize, f64)> = points.iter().map(|p| (p.stage, p.speed)).collect();
         s.sort_by_key(|a| a.0);
@@ -446,12 +548,19 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     let mut mus: Vec<f64> = points.iter().map(|p| p.mu_r).collect();
     mus.sort_by(f64::total_cmp);
     mus.dedup();
-    // mu against mu_r, one curve per eta_r and code, one panel per speed (paper Figs 5-7)
+    (stages, etas, mus)
+}
+
+/// Steady mu against mu_r, one curve per eta_r and code, one panel per speed (paper Figs
+/// 5-7).
+fn mu_against_mu_r(page: &mut Page, j: &Judgement, figs: &Path) -> Result<Vec<maud::Markup>> {
+    let (stages, etas, _) = axes(&j.points);
+    let mut fig_html = Vec::new();
     for &(k, speed) in &stages {
         let mut data: Vec<ErrCurve> = Vec::new();
         for (ci, &e) in etas.iter().enumerate() {
-            for (set, tag) in [(&points, ""), (&conv_points, " converged dt")] {
-                for code in &codes {
+            for (set, tag) in [(&j.points, ""), (&j.conv_points, " converged dt")] {
+                for code in &j.codes {
                     let sel: Vec<&Point> = set
                         .iter()
                         .filter(|p| p.code == *code && p.stage == k && p.eta_r == e)
@@ -481,13 +590,21 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             &format!("Steady μ against μr at {speed} m/s, one curve per ηr (95 % CI bars; LIGGGHTS and converged-dt results dashed)."),
         )?);
     }
-    // mu against speed, one panel per mu_r (paper Figs 12-15)
+    Ok(fig_html)
+}
+
+/// Steady mu against speed, one panel per mu_r (paper Figs 12-15), when the sweep has
+/// several stages.
+fn mu_against_speed(page: &mut Page, j: &Judgement, figs: &Path) -> Result<Vec<maud::Markup>> {
+    let (stages, etas, mus) = axes(&j.points);
+    let mut fig_html = Vec::new();
     if stages.len() > 1 {
         for &m_r in &mus {
             let mut data: Vec<ErrCurve> = Vec::new();
             for (ci, &e) in etas.iter().enumerate() {
-                for code in &codes {
-                    let sel: Vec<&Point> = points
+                for code in &j.codes {
+                    let sel: Vec<&Point> = j
+                        .points
                         .iter()
                         .filter(|p| p.code == *code && p.mu_r == m_r && p.eta_r == e)
                         .collect();
@@ -512,11 +629,19 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             fig_html.push(page.svg_file(&path, &format!("Steady μ against speed at μr = {m_r}."))?);
         }
     }
-    // heat maps: as run, and as judged (stand-ins marked), on one colour scale
-    let range = mu_range(points.iter().chain(&judged));
-    for code in &codes {
+    Ok(fig_html)
+}
+
+/// Heat maps of steady mu over (mu_r, eta_r): as run, and as judged (stand-ins marked), on
+/// one colour scale.
+fn heat_maps(page: &mut Page, j: &Judgement, figs: &Path) -> Result<Vec<maud::Markup>> {
+    let (stages, _, _) = axes(&j.points);
+    let mut fig_html = Vec::new();
+    let range = mu_range(j.points.iter().chain(&j.judged));
+    for code in &j.codes {
         for &(k, speed) in &stages {
-            let sel: Vec<&Point> = points
+            let sel: Vec<&Point> = j
+                .points
                 .iter()
                 .filter(|p| p.code == *code && p.stage == k)
                 .collect();
@@ -540,16 +665,17 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
                 &svg,
                 &format!("Steady μ over (μr, ηr), {code}, as run at the sweep's dt."),
             ));
-            let jsel: Vec<&Point> = judged_points
+            let jsel: Vec<&Point> = j
+                .judged_points
                 .iter()
                 .filter(|j| j.code == *code && j.stage == k)
                 .filter_map(|j| j.point.as_ref())
                 .collect();
-            if conv_points.is_empty() || jsel.is_empty() {
+            if j.conv_points.is_empty() || jsel.is_empty() {
                 continue;
             }
             let substituted = |p: &Point| {
-                judged_points.iter().any(|j| {
+                j.judged_points.iter().any(|j| {
                     j.substituted
                         && j.code == p.code
                         && j.stage == p.stage
@@ -594,8 +720,11 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             ));
         }
     }
-    page.figures(&fig_html);
-    // the time-step convergence studies used as stand-ins: their mu(dt) and E_rot(dt) figures
+    Ok(fig_html)
+}
+
+/// The time-step convergence studies used as stand-ins: their mu(dt) and E_rot(dt) figures.
+fn convergence_figures(page: &mut Page, converged: &[PathBuf]) -> Result<()> {
     let studies: Vec<&PathBuf> = converged
         .iter()
         .filter(|d| d.join("summary.json").is_file() && d.join("mu_dt.svg").is_file())
@@ -630,7 +759,11 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             page.figures(&figs);
         }
     }
-    // the paper's rotation maps (its Figs 8-11): seed 1 of each point, as each run drew it
+    Ok(())
+}
+
+/// The paper's rotation maps (its Figs 8-11): seed 1 of each point, as each run drew it.
+fn rotation_maps(page: &mut Page, m: &Manifest, dir: &Path) {
     let maps: Vec<(String, String)> = m
         .runs
         .iter()
@@ -659,18 +792,23 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
             }
         });
     }
+}
+
+/// Every point: as run, its stability, and as judged.
+fn points_table(page: &mut Page, j: &Judgement) {
     page.heading("table", "Points");
-    let rows: Vec<Vec<(String, &'static str)>> = points
+    let rows: Vec<Vec<(String, &'static str)>> = j
+        .points
         .iter()
         .map(|p| {
-            let j = judged_points.iter().find(|q| {
+            let judged = j.judged_points.iter().find(|q| {
                 q.code == p.code && q.stage == p.stage && q.mu_r == p.mu_r && q.eta_r == p.eta_r
             });
-            let conv = j
+            let conv = judged
                 .and_then(|j| j.point.as_ref())
                 .map(|q| format!("{:.4} ± {:.4}", q.mu, q.mu_ci95))
                 .unwrap_or("–".into());
-            let note = j.map(|j| j.note.clone()).unwrap_or_default();
+            let note = judged.map(|j| j.note.clone()).unwrap_or_default();
             vec![
                 (p.code.to_string(), ""),
                 (format!("{}", p.speed), "num"),
@@ -703,41 +841,6 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         ],
         &text_rows(rows),
     ));
-    write_atomic(&dir.join("report.html"), page.finish().as_bytes())?;
-    let rep = SweepReport {
-        schema: crate::run::SCHEMA,
-        points,
-        conclusions: concl,
-        converged_points: conv_points,
-        converged_conclusions: conv_concl,
-        judged: judged_points,
-        runs: results.len(),
-        run_wall_s_liggghts: wall_l,
-        run_wall_s_native: wall_n,
-    };
-    write_atomic(
-        &dir.join("report.json"),
-        serde_json::to_string_pretty(&rep)?.as_bytes(),
-    )?;
-    crate::run::note_summary(&dir.join("report.json"));
-    for (code, cs) in rep.conclusions.iter().chain(&rep.converged_conclusions) {
-        for c in cs {
-            println!("  {code}: {} -> {} ({})", c.claim, c.verdict, c.evidence);
-        }
-    }
-    println!("report: {}", dir.join("report.html").display());
-    if !missing.is_empty() {
-        // the page is written (it shows what exists), but an incomplete sweep is not a
-        // finished report: say so where scripts look, in the exit status
-        return Err(Error::Cases(format!(
-            "the report is partial: {} of {} runs have no current result (indices {}); run \
-             them (rerun the sweep command, or `verify sweep run-one`) and report again",
-            missing.len(),
-            m.runs.len(),
-            crate::run::sweep::indices(&missing)
-        )));
-    }
-    Ok(())
 }
 
 #[cfg(test)]
