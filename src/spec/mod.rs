@@ -384,7 +384,6 @@ impl CaseFile {
 
     /// Validates every field; see the module doc.
     pub fn validate(self) -> Result<Case> {
-        let mut warnings = Vec::new();
         if self.version != CASE_VERSION {
             return Err(Error::invalid("version", self.version, "1"));
         }
@@ -398,6 +397,35 @@ impl CaseFile {
         }
         let m = &self.material;
         m.validate(false)?;
+        self.check_models()?;
+        self.check_run()?;
+        self.check_particles()?;
+        let rmin = self
+            .particles
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min);
+        match &self.wall {
+            Some(w) => self.check_wall(w)?,
+            None => self.check_pair(rmin)?,
+        }
+        let warnings = check_dt(self.dt, m, rmin)?.into_iter().collect();
+        for r in self.applicable_rolling() {
+            check_damping_model(
+                &format!("material.rolling_damping (with rolling_models `{r}`)"),
+                m.rolling_damping,
+                r,
+            )?;
+        }
+        Ok(Case {
+            file: self,
+            warnings,
+        })
+    }
+
+    /// The models: one LIGGGHTS has (a contact case is compared with it), damped if eta_r > 0.
+    fn check_models(&self) -> Result<()> {
+        let m = &self.material;
         if self.models.rolling.native_only() {
             return Err(Error::invalid(
                 "models.rolling",
@@ -410,6 +438,11 @@ impl CaseFile {
             m.rolling_damping,
             self.models.rolling,
         )?;
+        Ok(())
+    }
+
+    /// The run: dt, steps, output interval, the step of the reversal.
+    fn check_run(&self) -> Result<()> {
         positive("dt", self.dt)?;
         if self.steps == 0 || self.steps > 100_000_000 {
             return Err(Error::invalid("steps", self.steps, "1 ..= 100000000"));
@@ -430,6 +463,11 @@ impl CaseFile {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// The spheres: how many, their sizes, states and motions within bounds, inside the box.
+    fn check_particles(&self) -> Result<()> {
         let expected = if self.wall.is_some() { 1 } else { 2 };
         if self.particles.len() != expected {
             return Err(Error::invalid(
@@ -476,7 +514,7 @@ impl CaseFile {
                 Motion::Free | Motion::Fixed => {}
             }
         }
-        let bounds = domain_half_size(&self);
+        let bounds = domain_half_size(self);
         for (k, p) in self.particles.iter().enumerate() {
             for d in 0..3 {
                 if p.position[d].abs() + p.radius > 0.5 * bounds {
@@ -488,87 +526,80 @@ impl CaseFile {
                 }
             }
         }
-        let rmin = self
-            .particles
-            .iter()
-            .map(|p| p.radius)
-            .fold(f64::INFINITY, f64::min);
-        if let Some(w) = &self.wall {
-            bounded3("wall.z", [w.z, 0.0, 0.0], MAX_LENGTH_M, "m")?;
-            positive("wall.half_size", w.half_size)?;
-            if let Some(wm) = &w.material {
-                check_elastic("wall.material", wm.youngs_modulus, wm.poisson_ratio)?;
-                // E <= 1e6 x the particles' keeps Yeff's sum of compliances from losing the
-                // particle's term entirely to round-off (a near-rigid wall is 1e3 stiffer)
-                let max = 1e6 * m.youngs_modulus;
-                if wm.youngs_modulus > max {
-                    return Err(Error::invalid(
-                        "wall.material.youngs_modulus",
-                        wm.youngs_modulus,
-                        format!("<= 1e6 x material.youngs_modulus ({max:e} Pa)"),
-                    ));
-                }
-            }
-            within("wall.half_size", w.half_size, MAX_LENGTH_M, "m")?;
-            let p = &self.particles[0];
-            let overlap = p.radius - (p.position[2] - w.z);
-            if p.position[2] <= w.z || overlap >= p.radius {
+        Ok(())
+    }
+
+    /// The wall and the sphere against it: the wall's size and material, the sphere above it
+    /// with a small overlap, on the face of one triangle.
+    fn check_wall(&self, w: &WallSpec) -> Result<()> {
+        let m = &self.material;
+        bounded3("wall.z", [w.z, 0.0, 0.0], MAX_LENGTH_M, "m")?;
+        positive("wall.half_size", w.half_size)?;
+        if let Some(wm) = &w.material {
+            check_elastic("wall.material", wm.youngs_modulus, wm.poisson_ratio)?;
+            // E <= 1e6 x the particles' keeps Yeff's sum of compliances from losing the
+            // particle's term entirely to round-off (a near-rigid wall is 1e3 stiffer)
+            let max = 1e6 * m.youngs_modulus;
+            if wm.youngs_modulus > max {
                 return Err(Error::invalid(
-                    "particles[0].position",
-                    format!("{:?}", p.position),
-                    "above the wall with an initial overlap smaller than the radius",
-                ));
-            }
-            if w.half_size < 4.0 * p.radius
-                || p.position[0].abs() + p.radius > 0.5 * w.half_size
-                || p.position[1].abs() + p.radius > 0.5 * w.half_size
-            {
-                return Err(Error::invalid(
-                    "wall.half_size",
-                    w.half_size,
-                    ">= 4 radii and the sphere within the inner half of the wall",
-                ));
-            }
-            // The sphere must touch the face of one triangle only, away from the diagonal.
-            let (x, y) = (p.position[0], p.position[1]);
-            if (x - y).abs() / std::f64::consts::SQRT_2 <= p.radius * 1.5 {
-                return Err(Error::invalid(
-                    "particles[0].position",
-                    format!("{:?}", p.position),
-                    "at least 1.5 radii away from the wall's diagonal x = y",
-                ));
-            }
-        } else {
-            let (a, b) = (&self.particles[0], &self.particles[1]);
-            let d = dist(a.position, b.position);
-            if d == 0.0 {
-                return Err(Error::invalid(
-                    "particles[1].position",
-                    format!("{:?}", b.position),
-                    "different from particles[0].position",
-                ));
-            }
-            let overlap = a.radius + b.radius - d;
-            if overlap >= rmin {
-                return Err(Error::invalid(
-                    "particles",
-                    format!("initial overlap {overlap:e} m"),
-                    format!("an initial overlap smaller than the smaller radius ({rmin:e} m)"),
+                    "wall.material.youngs_modulus",
+                    wm.youngs_modulus,
+                    format!("<= 1e6 x material.youngs_modulus ({max:e} Pa)"),
                 ));
             }
         }
-        warnings.extend(check_dt(self.dt, m, rmin)?);
-        for r in self.applicable_rolling() {
-            check_damping_model(
-                &format!("material.rolling_damping (with rolling_models `{r}`)"),
-                m.rolling_damping,
-                r,
-            )?;
+        within("wall.half_size", w.half_size, MAX_LENGTH_M, "m")?;
+        let p = &self.particles[0];
+        let overlap = p.radius - (p.position[2] - w.z);
+        if p.position[2] <= w.z || overlap >= p.radius {
+            return Err(Error::invalid(
+                "particles[0].position",
+                format!("{:?}", p.position),
+                "above the wall with an initial overlap smaller than the radius",
+            ));
         }
-        Ok(Case {
-            file: self,
-            warnings,
-        })
+        if w.half_size < 4.0 * p.radius
+            || p.position[0].abs() + p.radius > 0.5 * w.half_size
+            || p.position[1].abs() + p.radius > 0.5 * w.half_size
+        {
+            return Err(Error::invalid(
+                "wall.half_size",
+                w.half_size,
+                ">= 4 radii and the sphere within the inner half of the wall",
+            ));
+        }
+        // The sphere must touch the face of one triangle only, away from the diagonal.
+        let (x, y) = (p.position[0], p.position[1]);
+        if (x - y).abs() / std::f64::consts::SQRT_2 <= p.radius * 1.5 {
+            return Err(Error::invalid(
+                "particles[0].position",
+                format!("{:?}", p.position),
+                "at least 1.5 radii away from the wall's diagonal x = y",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Two spheres: apart or overlapping by less than the smaller radius `rmin`.
+    fn check_pair(&self, rmin: f64) -> Result<()> {
+        let (a, b) = (&self.particles[0], &self.particles[1]);
+        let d = dist(a.position, b.position);
+        if d == 0.0 {
+            return Err(Error::invalid(
+                "particles[1].position",
+                format!("{:?}", b.position),
+                "different from particles[0].position",
+            ));
+        }
+        let overlap = a.radius + b.radius - d;
+        if overlap >= rmin {
+            return Err(Error::invalid(
+                "particles",
+                format!("initial overlap {overlap:e} m"),
+                format!("an initial overlap smaller than the smaller radius ({rmin:e} m)"),
+            ));
+        }
+        Ok(())
     }
 }
 

@@ -629,13 +629,32 @@ impl ShearCase {
             .powf(2.0 / 3.0)
     }
 
-    /// Validates every field; `allow_inertial` lifts the I <= 1e-3 limit.
+    /// Validates every field; `allow_inertial` lifts the I <= 1e-3 limit. Returns the
+    /// warnings (a dt close to the Rayleigh time).
     pub fn validate(&self, allow_inertial: bool) -> Result<Vec<String>> {
-        let mut warnings = Vec::new();
         if self.version != 1 {
             return Err(Error::invalid("version", self.version, "1"));
         }
         check_identifier("name", &self.name)?;
+        self.check_grains()?;
+        let rmin = self.radii.iter().cloned().fold(f64::INFINITY, f64::min);
+        self.check_box()?;
+        self.check_plates(rmin)?;
+        let m = &self.material;
+        m.validate(true)?;
+        crate::spec::check_damping_model(
+            "material.rolling_damping (--eta-r)",
+            m.rolling_damping,
+            self.models.rolling,
+        )?;
+        let warnings: Vec<String> = super::check_dt(self.dt, m, rmin)?.into_iter().collect();
+        self.check_servo_and_neighbours(rmin)?;
+        self.check_stages(allow_inertial)?;
+        Ok(warnings)
+    }
+
+    /// The grains: their count, radii and percentages.
+    fn check_grains(&self) -> Result<()> {
         check_particles("particles", self.particles)?;
         if self.radii.is_empty() || self.radii.len() != self.percentages.len() {
             return Err(Error::invalid(
@@ -660,10 +679,14 @@ impl ShearCase {
         if (sum - 100.0).abs() > 1e-6 {
             return Err(Error::invalid("percentages", sum, "values summing to 100"));
         }
+        Ok(())
+    }
+
+    /// The periodic box: from 3 to 1000 neighbour cutoffs along x and z.
+    fn check_box(&self) -> Result<()> {
         positive("box_x", self.box_x)?;
         positive("box_z", self.box_z)?;
         let rmax = self.radii.iter().cloned().fold(0.0, f64::max);
-        let rmin = self.radii.iter().cloned().fold(f64::INFINITY, f64::min);
         let cut = 2.0 * rmax + self.skin;
         if self.box_x > 1000.0 * cut || self.box_z > 1000.0 * cut {
             return Err(Error::invalid(
@@ -679,6 +702,12 @@ impl ShearCase {
                 format!(">= 3 neighbour cutoffs (3 x {cut:e} m) so periodic images are distinct"),
             ));
         }
+        Ok(())
+    }
+
+    /// The plates' teeth: at most a quarter of the gouge high, at least a grain wide, a whole
+    /// number of them along x. `rmin`: the smallest radius.
+    fn check_plates(&self, rmin: f64) -> Result<()> {
         if let Plates::Teeth {
             tooth_height,
             tooth_wavelength,
@@ -719,14 +748,13 @@ impl ShearCase {
                 ));
             }
         }
-        let m = &self.material;
-        m.validate(true)?;
-        crate::spec::check_damping_model(
-            "material.rolling_damping (--eta-r)",
-            m.rolling_damping,
-            self.models.rolling,
-        )?;
-        warnings.extend(super::check_dt(self.dt, m, rmin)?);
+        Ok(())
+    }
+
+    /// The normal stress, the skin, the servo (LIGGGHTS' speed limit, its gains) and the
+    /// neighbour schedule (the plate must not outrun half the skin between fixed-interval
+    /// rebuilds). `rmin`: the smallest radius.
+    fn check_servo_and_neighbours(&self, rmin: f64) -> Result<()> {
         positive("normal_stress", self.normal_stress)?;
         positive("servo.vel_max", self.servo.vel_max)?;
         positive("skin", self.skin)?;
@@ -777,6 +805,12 @@ impl ShearCase {
         if self.servo.kp + self.servo.ki + self.servo.kd == 0.0 {
             return Err(Error::invalid("servo.kp", 0, "kp, ki, kd not all zero"));
         }
+        Ok(())
+    }
+
+    /// The compression and the stages: speeds, strains, the total step count, the output
+    /// interval, and the inertial number of each stage (<= 1e-3 unless `allow_inertial`).
+    fn check_stages(&self, allow_inertial: bool) -> Result<()> {
         if self.compression_steps == 0 {
             return Err(Error::invalid("compression_steps", 0, ">= 1"));
         }
@@ -815,7 +849,7 @@ impl ShearCase {
                 ));
             }
         }
-        Ok(warnings)
+        Ok(())
     }
 }
 
