@@ -717,68 +717,18 @@ impl ShearSim {
             state: &self.pair_state,
         };
         if sums == pairs::Sums::Accumulated && !implicit {
-            // One thread without dashpot sums: the pair sums are the particles' forces
-            // (`0 + a` is `a` bit for bit: a sum started at +0 is never -0), and only the
-            // particles with plate candidates (about 11 % on the fast state) are visited,
-            // their plate forces added in particle order as the loop below adds them (the
-            // other particles add +0, which changes no bit). Measured on the fast state
-            // (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per particle-step.
-            for ((f, t), a) in self.f.iter_mut().zip(self.torque.iter_mut()).zip(&self.acc) {
-                *f = a.delta_f;
-                *t = a.delta_torque;
-            }
-            let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
-            let mut none = ([0.0; 6], [0.0; 3]);
-            for q in 0..self.f.len() {
-                if walls.cstart[q] == walls.cstart[q + 1] {
-                    continue;
-                }
-                let mut wf = ([0.0; 3], [0.0; 3]);
-                let (f, t) = (&mut self.f[q], &mut self.torque[q]);
-                if !walls.particle(q, &mut self.wall[q], f, t, &mut wf, &mut none) {
-                    return Err(too_many_wall_contacts(self.step));
-                }
-                for c in 0..3 {
-                    tb[c] += wf.0[c];
-                    tt[c] += wf.1[c];
-                }
-            }
+            let totals = serial_sums(
+                &mut self.f,
+                &mut self.torque,
+                &mut self.wall,
+                &self.acc,
+                &walls,
+            );
+            let Some((tb, tt)) = totals else {
+                return Err(too_many_wall_contacts(self.step));
+            };
             return self.keep_plate_forces(tb, tt).map(|_| false);
         }
-        let failed = std::sync::atomic::AtomicBool::new(false);
-        let body = |q: usize,
-                    f: &mut V3,
-                    t: &mut V3,
-                    slots: &mut WallSlots,
-                    wf: &mut (V3, V3),
-                    imp: &mut ([f64; 6], V3),
-                    acc: &mut ForceData| {
-            *f = [0.0; 3];
-            *t = [0.0; 3];
-            if implicit {
-                *imp = ([0.0; 6], [0.0; 3]);
-                for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
-                    let PairDamp { damping: c, en: n } = pd[k as usize];
-                    if c == 0.0 {
-                        continue;
-                    }
-                    let pr = &nl.pairs[k as usize];
-                    let other = if is_i { pr.j } else { pr.i } as usize;
-                    add_dashpot(imp, c, n, torsion, omega[other]);
-                }
-            }
-            // the pair sums (pairs::pass)
-            sum.add(q, acc, f, t);
-            // a particle without plate candidates holds no records
-            // (`drop_records_without_candidates`): nothing to mark, test or clean up, and
-            // no plate force (its `wf` is not read)
-            if walls.cstart[q] == walls.cstart[q + 1] {
-                return;
-            }
-            if !walls.particle(q, slots, f, t, wf, imp) {
-                failed.store(true, std::sync::atomic::Ordering::Relaxed);
-            }
-        };
         let imps = if implicit {
             split_mut(&mut self.imp, th)
         } else {
@@ -792,27 +742,19 @@ impl ShearSim {
             .zip(split_mut(&mut self.wall_force, th))
             .zip(imps)
             .zip(split_mut(&mut self.acc, th))
+            .map(|(((((f, torque), wall), wall_force), imp), acc)| Shares {
+                f,
+                torque,
+                wall,
+                wall_force,
+                imp,
+                acc,
+            })
             .collect();
-        team.each(parts, |t, (((((f, tq), slots), wf), imp), acc)| {
-            let o = bounds(n, th, t).start;
-            let mut none = ([0.0; 6], [0.0; 3]);
-            for k in 0..f.len() {
-                let q = o + k;
-                let imp = imp.get_mut(k).unwrap_or(&mut none);
-                body(
-                    q,
-                    &mut f[k],
-                    &mut tq[k],
-                    &mut slots[k],
-                    &mut wf[k],
-                    imp,
-                    &mut acc[k],
-                );
-            }
-        });
+        let failed = team_sums(&team, parts, &walls, &sum, nl, pd);
         // every sum was read and zeroed (`PairSums::add`)
         self.plan.acc_zero = sums == pairs::Sums::Blocks;
-        if failed.into_inner() {
+        if failed {
             return Err(too_many_wall_contacts(self.step));
         }
         self.keep_plate_forces_summed().map(|_| false)
@@ -941,6 +883,128 @@ fn too_many_wall_contacts(step: u64) -> Error {
         step,
         msg: format!("a particle holds more than {MAX_WALL_CONTACTS} mesh contacts"),
     }
+}
+
+/// One thread without dashpot sums: the pair sums are the particles' forces (`0 + a` is `a`
+/// bit for bit: a sum started at +0 is never -0), and only the particles with plate
+/// candidates (about 11 % on the fast state) are visited, their plate forces added in
+/// particle order as [`team_sums`] adds them (the other particles add +0, which changes no
+/// bit). Measured on the fast state (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per
+/// particle-step. Returns the plate totals (bottom, top), or None when a particle would hold
+/// too many plate contacts.
+fn serial_sums(
+    f: &mut [V3],
+    torque: &mut [V3],
+    wall: &mut [WallSlots],
+    acc: &[ForceData],
+    walls: &walls::WallContext,
+) -> Option<(V3, V3)> {
+    for ((f, t), a) in f.iter_mut().zip(torque.iter_mut()).zip(acc) {
+        *f = a.delta_f;
+        *t = a.delta_torque;
+    }
+    let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
+    let mut none = ([0.0; 6], [0.0; 3]);
+    for q in 0..f.len() {
+        if walls.cstart[q] == walls.cstart[q + 1] {
+            continue;
+        }
+        let mut wf = ([0.0; 3], [0.0; 3]);
+        if !walls.particle(
+            q,
+            &mut wall[q],
+            &mut f[q],
+            &mut torque[q],
+            &mut wf,
+            &mut none,
+        ) {
+            return None;
+        }
+        for c in 0..3 {
+            tb[c] += wf.0[c];
+            tt[c] += wf.1[c];
+        }
+    }
+    Some((tb, tt))
+}
+
+/// One team member's share of the per-particle outputs of the sums region.
+struct Shares<'a> {
+    f: &'a mut [V3],
+    torque: &'a mut [V3],
+    wall: &'a mut [WallSlots],
+    wall_force: &'a mut [(V3, V3)],
+    /// epsd_implicit's dashpot sums (empty for the other models).
+    imp: &'a mut [([f64; 6], V3)],
+    acc: &'a mut [ForceData],
+}
+
+/// The sums region on a team (each member its share of the particles, in particle order):
+/// per particle, epsd_implicit's dashpot sums over its pairs, its pair sum
+/// ([`pairs::PairSums::add`]), then its plate contacts. True when a particle would hold too
+/// many plate contacts.
+fn team_sums(
+    team: &Team,
+    parts: Vec<Shares>,
+    walls: &walls::WallContext,
+    sum: &pairs::PairSums,
+    nl: &NeighborList,
+    pd: &[PairDamp],
+) -> bool {
+    let (implicit, torsion, omega) = (walls.implicit, walls.torsion, walls.omega);
+    let failed = std::sync::atomic::AtomicBool::new(false);
+    let body = |q: usize,
+                f: &mut V3,
+                t: &mut V3,
+                slots: &mut WallSlots,
+                wf: &mut (V3, V3),
+                imp: &mut ([f64; 6], V3),
+                acc: &mut ForceData| {
+        *f = [0.0; 3];
+        *t = [0.0; 3];
+        if implicit {
+            *imp = ([0.0; 6], [0.0; 3]);
+            for &(k, is_i) in &nl.entries[nl.start[q] as usize..nl.start[q + 1] as usize] {
+                let PairDamp { damping: c, en: n } = pd[k as usize];
+                if c == 0.0 {
+                    continue;
+                }
+                let pr = &nl.pairs[k as usize];
+                let other = if is_i { pr.j } else { pr.i } as usize;
+                add_dashpot(imp, c, n, torsion, omega[other]);
+            }
+        }
+        // the pair sums (pairs::pass)
+        sum.add(q, acc, f, t);
+        // a particle without plate candidates holds no records
+        // (`drop_records_without_candidates`): nothing to mark, test or clean up, and
+        // no plate force (its `wf` is not read)
+        if walls.cstart[q] == walls.cstart[q + 1] {
+            return;
+        }
+        if !walls.particle(q, slots, f, t, wf, imp) {
+            failed.store(true, std::sync::atomic::Ordering::Relaxed);
+        }
+    };
+    let (n, th) = (walls.x.len(), team.threads());
+    team.each(parts, |t, s| {
+        let o = bounds(n, th, t).start;
+        let mut none = ([0.0; 6], [0.0; 3]);
+        for k in 0..s.f.len() {
+            let q = o + k;
+            let imp = s.imp.get_mut(k).unwrap_or(&mut none);
+            body(
+                q,
+                &mut s.f[k],
+                &mut s.torque[k],
+                &mut s.wall[k],
+                &mut s.wall_force[k],
+                imp,
+                &mut s.acc[k],
+            );
+        }
+    });
+    failed.into_inner()
 }
 
 /// The dense state after `steps` compression steps of `case` from `loose` (plates still, the
