@@ -4,7 +4,8 @@
 use crate::cli::args::{LiggghtsArgs, PresetArg, RollingArg};
 use crate::compare::{MU_MARGIN, STRESS_RTOL};
 use crate::error::Result;
-use crate::run::shear::{print_summary, run, ShearRequest};
+use crate::report::shear_text::{print_seed, print_summary};
+use crate::run::shear::{run, ShearRequest};
 use crate::run::{out_or_default, Engine, Verdict, SHEAR_TIMEOUT_S};
 use crate::shear::{Checkpointing, CHECKPOINT_EVERY};
 use crate::spec::shear::{CaseRequest, Overrides, Protocol};
@@ -184,7 +185,7 @@ impl ShearArgs {
 /// `verify shear`: runs, prints, writes `summary.json`; the verdict of its comparisons.
 pub fn shear(a: ShearArgs) -> Result<Verdict> {
     let req = a.request(a.engine(), &format!("shear-{}", a.preset.keyword()));
-    let summary = run(&req)?;
+    let summary = run(&req, &print_seed)?;
     crate::report::shear::figures(&req.out, &summary)?;
     print_summary(&summary, &req.out);
     Ok(summary.verdict())

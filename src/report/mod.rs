@@ -9,6 +9,7 @@ pub mod paper;
 pub mod plot;
 pub mod replay;
 pub mod shear;
+pub mod shear_text;
 pub mod sweep;
 
 use crate::compare::ChannelResult;

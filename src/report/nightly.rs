@@ -75,8 +75,14 @@ fn mu_measured(r: &ShearRow) -> String {
 pub struct NightFigures;
 
 impl crate::run::nightly::Figures for NightFigures {
+    fn seed(&self, s: &crate::run::shear::SeedResult) {
+        crate::report::shear_text::print_seed(s);
+    }
+
     fn shear(&self, out: &Path, s: &crate::run::shear::ShearSummary) -> Result<()> {
-        crate::report::shear::figures(out, s)
+        crate::report::shear::figures(out, s)?;
+        crate::report::shear_text::print_summary(s, out);
+        Ok(())
     }
 
     fn replay(&self, out: &Path, o: &crate::run::replay::ReplayOutcome, ran: bool) -> Result<()> {

@@ -91,7 +91,10 @@ fn history_path(a: &NightlyRequest) -> PathBuf {
 /// What the night draws as each run finishes (the report layer's figures, given by the
 /// command): the run layer runs and judges, and never imports the report layer.
 pub trait Figures {
-    /// A shear point's figures into its folder `out`, from its outcome.
+    /// A shear point's seed as it finishes (its lines on stdout).
+    fn seed(&self, s: &SeedResult);
+    /// A shear point's figures into its folder `out`, from its outcome, and its summary on
+    /// stdout.
     fn shear(&self, out: &Path, s: &ShearSummary) -> Result<()>;
     /// A replay's figures into its folder `out`, and its table on stdout.
     fn replay(&self, out: &Path, o: &ReplayOutcome, ran: bool) -> Result<()>;
@@ -327,9 +330,8 @@ fn shear_night(
         dir,
     };
     println!("\n== shear {} ==", row.name);
-    match super::shear::run(&args).and_then(|s| {
+    match super::shear::run(&args, &|s| figures.seed(s)).and_then(|s| {
         figures.shear(&args.out, &s)?;
-        super::shear::print_summary(&s, &args.out);
         fill_shear_row(&mut row, &s)
     }) {
         Ok(()) => {}

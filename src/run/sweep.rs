@@ -315,7 +315,8 @@ pub fn run_one(
              plan the sweep again)",
         ));
     }
-    let summary: ShearSummary = super::shear::run_cases(&req, vec![(case.clone(), warnings)])?;
+    let summary: ShearSummary =
+        super::shear::run_cases(&req, vec![(case.clone(), warnings)], &|_| {})?;
     let ends = case.run_ends();
     // the study's series in memory (one seed; none for a code that did not run)
     let (ls, ns): (Option<Series>, Option<Series>) = (

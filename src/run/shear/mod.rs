@@ -4,7 +4,6 @@
 mod cache;
 mod lockstep;
 mod outcome;
-mod print;
 
 use super::{utc_stamp, Engine, LiggghtsRequest, SHEAR_TIMEOUT_S};
 use crate::compare::{lockstep, steady, LOCKSTEP_RTOL, MU_MARGIN, STRESS_RTOL};
@@ -23,8 +22,6 @@ use lockstep::cached_lockstep;
 pub use lockstep::{lockstep_case, shear_lockstep, LOCKSTEP_CHANNELS, LOCKSTEP_SHEAR_STEPS};
 use outcome::slip_results;
 pub use outcome::{mu_results, stress_result, CodeProfiles, CodeSeries, SeedResult, ShearSummary};
-use print::print_seed;
-pub use print::print_summary;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -139,20 +136,25 @@ pub fn shear_case(c: &CaseRequest, seed: u64, engine: Engine) -> Result<(ShearCa
 }
 
 /// Runs every seed of a shear case in the codes asked for (reusing stored per-seed results),
-/// compares them, writes plots and `summary.json` into the output directory, and returns the
-/// summary.
-pub fn run(a: &ShearRequest) -> Result<ShearSummary> {
+/// compares them, writes `summary.json` into the output directory, and returns the summary.
+/// `on_seed` is given each seed's result as it finishes (the command prints it; the run
+/// layer prints no result itself).
+pub fn run(a: &ShearRequest, on_seed: &dyn Fn(&SeedResult)) -> Result<ShearSummary> {
     a.validate()?;
     let cases: Vec<(ShearCase, Vec<String>)> = a
         .seed_range()
         .map(|s| a.seed_case(s))
         .collect::<Result<_>>()?;
-    run_cases(a, cases)
+    run_cases(a, cases, on_seed)
 }
 
 /// [`run`] with the seeds' cases already built (`a.seed_case` of each seed, in order; a sweep
 /// builds its case once to check the input hash and passes it on).
-pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Result<ShearSummary> {
+pub fn run_cases(
+    a: &ShearRequest,
+    cases: Vec<(ShearCase, Vec<String>)>,
+    on_seed: &dyn Fn(&SeedResult),
+) -> Result<ShearSummary> {
     if cases.len() as u64 != a.seeds || cases.is_empty() {
         return Err(Error::invalid(
             "cases",
@@ -189,9 +191,7 @@ pub fn run_cases(a: &ShearRequest, cases: Vec<(ShearCase, Vec<String>)>) -> Resu
     let mut runs = Runs::default();
     for (case, _) in &cases {
         let (sr, ls, ns) = run_seed(a, case, lig.as_ref(), &pool)?;
-        if !a.quiet {
-            print_seed(&sr);
-        }
+        on_seed(&sr);
         runs.seeds.push(sr);
         runs.liggghts.extend(ls);
         runs.native.extend(ns);

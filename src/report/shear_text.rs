@@ -1,6 +1,7 @@
-//! The lines `verify shear` prints of a seed and of a study.
+//! The lines `verify shear` (and the nightly's shear points) print of a seed as it finishes
+//! and of a study: the run layer's outcome as text.
 
-use super::outcome::{SeedResult, ShearSummary};
+use crate::run::shear::{SeedResult, ShearSummary};
 use std::path::Path;
 
 /// Prints a study's steady figures, paired differences and verdicts.
@@ -115,7 +116,7 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
     );
 }
 
-pub(super) fn print_seed(s: &SeedResult) {
+pub fn print_seed(s: &SeedResult) {
     let mut line = format!("  seed {}:", s.seed);
     if let Some(w) = s.liggghts_wall_s {
         line += &format!(
