@@ -143,6 +143,13 @@ mod tests {
         assert!(r[1].pass);
         assert_eq!(r[1].peak, 5.0);
         assert!((r[1].max_rel_err - 2e-21).abs() < 1e-30);
+        // the peak is either series' largest norm: here the first's (a cargo-mutants
+        // survivor: the first series' norm mutated passed while the second's set the peak)
+        let a = series(&[[0.0, 3.0, 4.0]]);
+        let b = series(&[[0.0, 0.0, 0.0]]);
+        let r = compare("c", "m", &a, &b, 1e-9).unwrap();
+        assert_eq!(r[1].peak, 5.0);
+        assert_eq!(r[1].max_rel_err, 4.0 / 5.0);
     }
 
     #[test]

@@ -399,6 +399,12 @@ mod history_tests {
             assert_eq!(got.to_bits(), rsq.to_bits());
             assert_eq!(touch, touching, "r {r}, radsum {}", radi + radj);
         }
+        // an image along every axis (the shear box is periodic in x and z only, the rule is
+        // the same on y; a cargo-mutants survivor: `- shift[1]` passed with a zero y shift)
+        let (xj, shift) = ([0.0, 3.9e-3, 0.0], [0.0, -4e-3, 0.0]);
+        let (delta, _, touch) = pair_geometry::<f64>([0.0, 0.1e-3, 0.0], xj, shift, 0.2e-3, 0.2e-3);
+        assert_eq!(delta, [0.0, 0.1e-3 - (3.9e-3 - 4e-3), 0.0]);
+        assert!(touch);
     }
 
     /// An atom triggers a rebuild once it moved strictly more than skin/2 since the last

@@ -135,6 +135,19 @@ mod tests {
         assert_relative_eq!(shear[0], 0.5 * nf.fn_ / nf.kt, max_relative = 1e-14);
     }
 
+    /// The sliding label: at the Coulomb limit to round-off, not below it (a cargo-mutants
+    /// survivor: the label's tolerance `1 - 1e-9` could become `1 / 1e-9` unseen).
+    #[test]
+    fn sliding_is_the_coulomb_limit_to_round_off() {
+        let p = params(RollingModel::Off);
+        let fn_ = 2.0;
+        let cap = p.coeff_frict * fn_;
+        assert!(sliding::<f64>([cap, 0.0, 0.0], fn_, &p));
+        assert!(sliding::<f64>([0.0, 0.0, -cap * (1.0 - 1e-12)], -fn_, &p));
+        assert!(!sliding::<f64>([cap * (1.0 - 1e-6), 0.0, 0.0], fn_, &p));
+        assert!(!sliding::<f64>([0.5 * cap, 0.0, 0.0], fn_, &p));
+    }
+
     #[test]
     fn history_is_untouched_without_update() {
         let p = params(RollingModel::Off);
