@@ -105,3 +105,9 @@ impl Error {
         }
     }
 }
+
+/// A drawing error of an in-memory SVG (plotters), as an I/O error: the one conversion of the
+/// report's figures and the runs' rotation maps.
+pub(crate) fn draw_err(e: impl std::fmt::Display) -> Error {
+    Error::io("(SVG in memory)", std::io::Error::other(e.to_string()))
+}

@@ -5,16 +5,11 @@
 //! (`seedN/rotation_map.svg`), an output of the run as its ParaView snapshots are
 //! ([`crate::vtk`]); LIGGGHTS' dumps do not integrate rotations.
 
-use crate::error::{Error, Result};
+use crate::error::{draw_err, Result};
 use crate::fsutil::write_atomic;
 use crate::solver::shear::Snapshot;
 use plotters::prelude::*;
 use std::path::Path;
-
-/// A drawing error of the in-memory SVG.
-fn draw_err(e: impl std::fmt::Display) -> Error {
-    Error::io("(SVG in memory)", std::io::Error::other(e.to_string()))
-}
 
 /// Colour of a rotation on the scale 0 ..= `hi` [rad]: white, through orange, to dark red.
 fn color(v: f64, hi: f64) -> RGBColor {

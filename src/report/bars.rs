@@ -1,7 +1,7 @@
 //! Grouped bar chart with 95 % confidence-interval whiskers, as a standalone SVG (steady mu of
 //! both codes per shear case), drawn with plotters' primitives (rectangles, paths, text).
 
-use crate::error::{Error, Result};
+use crate::error::{draw_err, Result};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -28,11 +28,6 @@ pub fn escape(s: &str) -> String {
 
 /// LIGGGHTS blue, native orange (as the line plots).
 const COLORS: [RGBColor; 2] = [RGBColor(31, 119, 180), RGBColor(255, 127, 14)];
-
-/// A drawing error of an in-memory SVG.
-pub(crate) fn draw_err(e: impl std::fmt::Display) -> Error {
-    Error::io("(SVG in memory)", std::io::Error::other(e.to_string()))
-}
 
 /// The chart as an SVG document (plotters); `legend` names the colours.
 pub fn bar_chart(

@@ -3,8 +3,8 @@
 //! (Figs 12-15), a heat map over (mu_r, eta_r), and the three conclusions checked in numbers.
 
 use crate::compare::{mean_ci95, within_cis};
+use crate::error::draw_err;
 use crate::error::Result;
-use crate::report::bars::draw_err;
 use crate::run::sweep::RunResult;
 use crate::run::Code;
 use plotters::prelude::*;
