@@ -43,9 +43,9 @@ impl Bricks {
             .unwrap_or(self.count() - 1)
     }
 
-    /// Brick `b`'s particles in increasing id, and whether each is its own: those it owns and
-    /// those within `cut` of it along both periodic axes (its ghosts).
-    pub fn members(&self, b: usize, x: &[V3], cut: f64) -> (Vec<usize>, Vec<bool>) {
+    /// Whether a particle at `p` (wrapped) is brick `b`'s: its own, or within `cut` of it
+    /// along both periodic axes (a ghost it holds).
+    pub fn holds(&self, b: usize, p: V3, cut: f64) -> bool {
         let ([x0, x1], [z0, z1]) = self.extent(b);
         // distance along a periodic axis of length l from v to [a, c)
         let gap = |v: f64, a: f64, c: f64, l: f64| {
@@ -56,13 +56,19 @@ impl Bricks {
                 (a - v).rem_euclid(l).min((v - c).rem_euclid(l))
             }
         };
+        self.owner(p) == b
+            || (gap(p[0], x0, x1, self.lx) <= cut && gap(p[2], z0, z1, self.lz) <= cut)
+    }
+
+    /// Brick `b`'s particles in increasing id, and whether each is its own: those it owns and
+    /// those within `cut` of it along both periodic axes (its ghosts).
+    pub fn members(&self, b: usize, x: &[V3], cut: f64) -> (Vec<usize>, Vec<bool>) {
         let mut ids = Vec::new();
         let mut own = Vec::new();
         for (q, p) in x.iter().enumerate() {
-            let mine = self.owner(*p) == b;
-            if mine || (gap(p[0], x0, x1, self.lx) <= cut && gap(p[2], z0, z1, self.lz) <= cut) {
+            if self.holds(b, *p, cut) {
                 ids.push(q);
-                own.push(mine);
+                own.push(self.owner(*p) == b);
             }
         }
         (ids, own)

@@ -11,6 +11,7 @@
 //! bit-identical for any number of threads (tested).
 
 pub mod bricks;
+pub mod decompose;
 mod implicit;
 pub mod neighbor;
 mod observe;
@@ -221,6 +222,15 @@ pub struct ShearSim {
     /// The parallel pair pass's per-list plan.
     #[serde(skip)]
     plan: pairs::BlockPlan,
+    /// A brick of a decomposed run ([`decompose`]): each local particle's global id, in
+    /// increasing order (empty in one process: ids are indices).
+    #[serde(skip)]
+    ids: Vec<u32>,
+    /// A brick's ghosts: particles another brick owns, held for their pairs with this one's
+    /// (empty in one process). A ghost's position and velocities are its owner's, sent every
+    /// step; its force, kick and plate contacts are not made here.
+    #[serde(skip)]
+    ghost: Vec<bool>,
 }
 
 /// Wall time spent in each phase of [`ShearSim::step`] [s], summed over `steps` steps.
@@ -359,6 +369,8 @@ impl ShearSim {
             phases: None,
             team: None,
             plan: Default::default(),
+            ids: Vec::new(),
+            ghost: Vec::new(),
         }
     }
 
@@ -398,6 +410,11 @@ impl ShearSim {
         self.kernel
     }
 
+    /// The global index of local particle `i` (a brick's ids; in one process `i` itself).
+    fn id_of(&self, i: usize) -> usize {
+        self.ids.get(i).map_or(i, |&g| g as usize)
+    }
+
     /// Sizes the per-pair buffers for the current pair list (after a build).
     fn size_pair_buffers(&mut self) {
         let np = self.nl.pairs.len();
@@ -426,6 +443,27 @@ impl ShearSim {
 
     /// One time step.
     pub fn step(&mut self) -> Result<()> {
+        let moved = self.drift();
+        self.move_plates();
+        self.lap(|p| &mut p.plates);
+        if self.decide_rebuild(moved) {
+            self.rebuild()?;
+        } else {
+            // FixMesh::pre_force on a step without rebuild: a plate whose nodes moved more
+            // than skin/2 since the last build asks for a rebuild at the next step
+            self.mesh_rebuild_pending = self.plates_moved();
+        }
+        self.lap(|p| &mut p.neighbor);
+        let kicked = self.forces_of_step()?;
+        self.finish_step(kicked);
+        Ok(())
+    }
+
+    /// The first part of a step: nve/sphere's initial_integrate (the half-kick and the
+    /// drift, and the rotation sum) of every particle, and in the same pass
+    /// `Neighbor::check_distance`: true when a particle (a brick's own, not a ghost) moved
+    /// more than skin/2 since the last build.
+    fn drift(&mut self) -> bool {
         self.step += 1;
         if let Some(p) = &mut self.phases {
             p.last = std::time::Instant::now();
@@ -447,7 +485,7 @@ impl ShearSim {
             self.pack_all(&team);
         }
         let (kick, f, torque) = (&self.kick[..], &self.f[..], &self.torque[..]);
-        let (xhold, skin) = (&self.xhold[..], self.skin);
+        let (xhold, skin, ghost) = (&self.xhold[..], self.skin, &self.ghost[..]);
         // the drift, and in the same pass `Neighbor::check_distance` on the drifted positions
         // (some atom moved more than skin/2 since the last build); each share's inputs as
         // slices of its own (no bounds check or reload of an array's address per particle)
@@ -461,6 +499,7 @@ impl ShearSim {
         let moved = team
             .map(parts, |t, ((((x, v), w), rot), packed)| {
                 let r = bounds(n, th, t);
+                let ghost = ghost.get(r.clone()).unwrap_or(&[]);
                 let (f, torque, kick, xhold) = (
                     &f[r.clone()],
                     &torque[r.clone()],
@@ -481,7 +520,7 @@ impl ShearSim {
                     for c in 0..3 {
                         rot[c] += w[c] * dt;
                     }
-                    moved |= moved_beyond_half_skin(*x, *hold, skin);
+                    moved |= moved_beyond_half_skin(*x, *hold, skin) && ghost.get(k) != Some(&true);
                     if let Some(p) = packed.get_mut(k) {
                         p.moved(*x, *v, *w);
                     }
@@ -491,21 +530,25 @@ impl ShearSim {
             .contains(&true);
         self.packed_current = pack;
         self.lap(|p| &mut p.integrate);
-        self.move_plates();
-        self.lap(|p| &mut p.plates);
-        if self.decide_rebuild(moved) {
-            self.rebuild()?;
-        } else {
-            // FixMesh::pre_force on a step without rebuild: a plate whose nodes moved more
-            // than skin/2 since the last build asks for a rebuild at the next step
-            self.mesh_rebuild_pending = self.plates_moved();
-        }
-        self.lap(|p| &mut p.neighbor);
-        // the final half-kick may be made in the force evaluation's last region (see
-        // `forces_and_kick`), unless the velocities at force time are kept or the implicit
-        // dashpots need every particle's sums first
+        moved
+    }
+
+    /// The step's force evaluation (with history update); true when it made the final
+    /// half-kick too: in the force evaluation's last region (see `forces_and_kick`), unless
+    /// the velocities at force time are kept or the implicit dashpots need every particle's
+    /// sums first.
+    fn forces_of_step(&mut self) -> Result<bool> {
         let fuse_kick = self.force_time_velocities.is_none() && !self.implicit;
-        let kicked = self.forces_and_kick(true, fuse_kick)?;
+        self.forces_and_kick(true, fuse_kick)
+    }
+
+    /// The last part of a step, after its force evaluation (which made the final half-kick
+    /// when `kicked`): nve/sphere's final_integrate, the implicit dashpots, the servo's
+    /// update from the top plate's force.
+    fn finish_step(&mut self, kicked: bool) {
+        let nve = self.nve;
+        let team = self.team();
+        let (th, n) = (team.threads(), self.x.len());
         if let Some((v, w)) = &mut self.force_time_velocities {
             v.clone_from(&self.v);
             w.clone_from(&self.omega);
@@ -530,7 +573,6 @@ impl ShearSim {
         self.lap(|p| &mut p.integrate);
         self.servo.final_integrate(self.top_force, self.nve.dtv);
         self.lap(|p| &mut p.plates);
-        Ok(())
     }
 
     /// The team of the per-step regions: as many threads as the rayon pool this is called
@@ -721,6 +763,7 @@ impl ShearSim {
                 &mut self.f,
                 &mut self.torque,
                 &mut self.wall,
+                &mut self.wall_force,
                 &self.acc,
                 &walls,
             );
@@ -890,12 +933,14 @@ fn too_many_wall_contacts(step: u64) -> Error {
 /// candidates (about 11 % on the fast state) are visited, their plate forces added in
 /// particle order as [`team_sums`] adds them (the other particles add +0, which changes no
 /// bit). Measured on the fast state (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per
-/// particle-step. Returns the plate totals (bottom, top), or None when a particle would hold
-/// too many plate contacts.
+/// particle-step. Returns the plate totals (bottom, top), each particle's contributions kept
+/// in `wall_force` (a brick's share of the plate forces, [`decompose`]), or None when a
+/// particle would hold too many plate contacts.
 fn serial_sums(
     f: &mut [V3],
     torque: &mut [V3],
     wall: &mut [WallSlots],
+    wall_force: &mut [(V3, V3)],
     acc: &[ForceData],
     walls: &walls::WallContext,
 ) -> Option<(V3, V3)> {
@@ -909,15 +954,8 @@ fn serial_sums(
         if walls.cstart[q] == walls.cstart[q + 1] {
             continue;
         }
-        let mut wf = ([0.0; 3], [0.0; 3]);
-        if !walls.particle(
-            q,
-            &mut wall[q],
-            &mut f[q],
-            &mut torque[q],
-            &mut wf,
-            &mut none,
-        ) {
+        let wf = &mut wall_force[q];
+        if !walls.particle(q, &mut wall[q], &mut f[q], &mut torque[q], wf, &mut none) {
             return None;
         }
         for c in 0..3 {
@@ -1081,7 +1119,7 @@ mod tests {
     /// Every piece of state a step carries to the next (particles, forces, rotations, pair
     /// list with histories, wall contact slots, plates, servo, rebuild state) as bytes,
     /// f64 as their bits.
-    fn state_bytes(s: &ShearSim) -> Vec<u8> {
+    pub(super) fn state_bytes(s: &ShearSim) -> Vec<u8> {
         rmp_serde::to_vec(&(
             (&s.x, &s.v, &s.omega, &s.f, &s.torque, &s.rotation),
             (&s.nl.pairs, &s.nl.hist, &s.wall, &s.wall_cand),

@@ -84,8 +84,66 @@ pub struct Periodic {
     pub lz: f64,
 }
 
+/// The histories a rebuild may carry over: those of listed pairs with a bit set (a touching
+/// pair with an all-zero history gets the same bits as a new one), each with its pair's
+/// `(i, j)` as global ids, sorted by the pair's key (lower id, higher id).
+#[derive(Clone, Debug, Default)]
+pub struct Carried {
+    pub ij: Vec<(u32, u32)>,
+    pub hist: Vec<ContactHistory>,
+    /// The length of the list they came from: about the next one's (the list changes little
+    /// between builds; a capacity of 8 per particle held 256 bytes per particle for 140 used).
+    pub listed: usize,
+}
+
+impl Carried {
+    /// A pair's key: (lower id, higher id), the order of the list and of `Carried`.
+    pub fn key((i, j): (u32, u32)) -> (u32, u32) {
+        (i.min(j), i.max(j))
+    }
+
+    /// Merges histories carried from elsewhere (a brick's immigrants, `ij` global) into
+    /// these: sorted by key, one entry per pair (two copies of a pair's history, one per
+    /// owner of its members, are equal bit for bit: the first is kept).
+    pub fn merge(&mut self, more: impl IntoIterator<Item = ((u32, u32), ContactHistory)>) {
+        let mut all: Vec<((u32, u32), ContactHistory)> = std::mem::take(&mut self.ij)
+            .into_iter()
+            .zip(std::mem::take(&mut self.hist))
+            .chain(more)
+            .collect();
+        all.sort_by_key(|e| Carried::key(e.0));
+        all.dedup_by_key(|e| Carried::key(e.0));
+        (self.ij, self.hist) = all.into_iter().unzip();
+    }
+}
+
+/// Which particles of a brick (issue #39, [`super::bricks`]) a list is built over: each
+/// one's global id (increasing: local order is id order) and whether it is a ghost (held for
+/// its pairs with the brick's own particles; pairs of two ghosts are not listed). Empty
+/// slices: one process, ids are indices, no ghosts.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Members<'a> {
+    pub ids: &'a [u32],
+    pub ghost: &'a [bool],
+}
+
+impl Members<'_> {
+    fn id(&self, q: u32) -> u32 {
+        if self.ids.is_empty() {
+            q
+        } else {
+            self.ids[q as usize]
+        }
+    }
+
+    fn ghost(&self, q: usize) -> bool {
+        self.ghost.get(q) == Some(&true)
+    }
+}
+
 impl NeighborList {
-    /// Rebuilds the list for positions `x` (already wrapped into [0, lx) x [0, lz)).
+    /// Rebuilds the list for positions `x` (already wrapped into [0, lx) x [0, lz)), carrying
+    /// the histories of its touching pairs over from the list it replaces.
     pub fn build(
         &mut self,
         team: &Team,
@@ -93,6 +151,49 @@ impl NeighborList {
         radius: &[f64],
         skin: f64,
         box_: Periodic,
+    ) {
+        let carried = self.take_carried(Members::default());
+        self.build_over(team, x, radius, skin, box_, Members::default(), carried);
+    }
+
+    /// The histories to carry over, and nothing else (see [`Carried`]), in list order, which
+    /// is key order; the histories compacted in place in the old array, whose tail is then
+    /// returned, and the old list and per-particle index freed, before a new list is made.
+    /// Measured at 250,000 particles (peak RSS growth of the solver for 814 bytes per
+    /// particle held): old and new lists side by side about 1,180; a separate copy of the
+    /// carried histories beside the old list 1,034; this 890 (`verify bench`).
+    pub fn take_carried(&mut self, over: Members) -> Carried {
+        let carry = |h: &ContactHistory| !h.all_bits_zero();
+        let mut ij: Vec<(u32, u32)> =
+            Vec::with_capacity(self.hist.iter().filter(|h| carry(h)).count());
+        let mut hist = std::mem::take(&mut self.hist);
+        for k in 0..hist.len() {
+            if carry(&hist[k]) {
+                hist[ij.len()] = hist[k];
+                let p = &self.pairs[k];
+                ij.push((over.id(p.i), over.id(p.j)));
+            }
+        }
+        hist.truncate(ij.len());
+        hist.shrink_to_fit();
+        let listed = self.pairs.len();
+        self.pairs = Vec::new();
+        self.entries = Vec::new();
+        Carried { ij, hist, listed }
+    }
+
+    /// Builds the list over the particles `over` (see [`Members`]) for positions `x` (already wrapped),
+    /// each touching pair given its history from `carried` (by the pair's global ids).
+    #[allow(clippy::too_many_arguments)]
+    pub fn build_over(
+        &mut self,
+        team: &Team,
+        x: &[[f64; 3]],
+        radius: &[f64],
+        skin: f64,
+        box_: Periodic,
+        over: Members,
+        carried: Carried,
     ) {
         let n = x.len();
         let rmax = radius.iter().cloned().fold(0.0, f64::max);
@@ -144,32 +245,7 @@ impl NeighborList {
                 [p[0], p[1], p[2], radius[j as usize]]
             })
             .collect();
-        // about the last list's length: the list changes little between builds (a capacity
-        // of 8 per particle held 256 bytes per particle for 140 used)
-        let new_pairs: Vec<Pair> = Vec::with_capacity(self.pairs.len() + spare(self.pairs.len()));
-        // The histories to carry over, and nothing else: those of the listed pairs whose
-        // history has a bit set (a touching pair with an all-zero history gets the same bits
-        // as a new one), in list order, with their pair's (i, j); the histories compacted in
-        // place in the old array, whose tail is then returned, and the old list and
-        // per-particle index freed, before the new list is made. Measured at 250,000
-        // particles (peak RSS growth of the solver for 814 bytes per particle held): old
-        // and new lists side by side about 1,180; a separate copy of the carried histories
-        // beside the old list 1,034; this 890 (`verify bench`).
-        let key = |(i, j): (u32, u32)| (i.min(j), i.max(j));
-        let carry = |h: &ContactHistory| !h.all_bits_zero();
-        let mut carried_ij: Vec<(u32, u32)> =
-            Vec::with_capacity(self.hist.iter().filter(|h| carry(h)).count());
-        let mut carried_hist = std::mem::take(&mut self.hist);
-        for k in 0..carried_hist.len() {
-            if carry(&carried_hist[k]) {
-                carried_hist[carried_ij.len()] = carried_hist[k];
-                carried_ij.push((self.pairs[k].i, self.pairs[k].j));
-            }
-        }
-        carried_hist.truncate(carried_ij.len());
-        carried_hist.shrink_to_fit();
-        self.pairs = Vec::new();
-        self.entries = Vec::new();
+        let new_pairs: Vec<Pair> = Vec::with_capacity(carried.listed + spare(carried.listed));
         // the search, each thread over its share of the particles in order ([`bounds`]);
         // the shares' lists joined in thread order are the serial list (the first share
         // fills the list itself: a copy of the whole list would raise the peak)
@@ -183,6 +259,7 @@ impl NeighborList {
             let mut touching: Vec<bool> = Vec::with_capacity(new_pairs.capacity());
             let mut cand: Vec<(u32, [f64; 3], bool)> = Vec::new();
             for i in range {
+                let ghost_i = over.ghost(i);
                 let c = cell_of[i] as usize;
                 let (ix, iy, iz) = (c / (ny * nz), (c / nz) % ny, c % nz);
                 // the z columns of i's neighbour cells (periodic)
@@ -214,6 +291,9 @@ impl NeighborList {
                             let above = cell.partition_point(|&j| (j as usize) <= i);
                             let recs = &rec[span][above..];
                             for (&j, xj) in cell[above..].iter().zip(recs) {
+                                if ghost_i && over.ghost(j as usize) {
+                                    continue;
+                                }
                                 let mut shift = [0.0; 3];
                                 let mut d = [x[i][0] - xj[0], x[i][1] - xj[1], x[i][2] - xj[2]];
                                 if d[0] > 0.5 * box_.lx {
@@ -269,24 +349,32 @@ impl NeighborList {
             if !touch {
                 continue;
             }
-            let now = key((p.i, p.j));
-            while k < carried_ij.len() && key(carried_ij[k]) < now {
+            let gi = over.id(p.i);
+            let now = Carried::key((gi, over.id(p.j)));
+            while k < carried.ij.len() && Carried::key(carried.ij[k]) < now {
                 k += 1;
             }
-            if k < carried_ij.len() && key(carried_ij[k]) == now {
-                let (old_i, h) = (carried_ij[k].0, carried_hist[k]);
+            if k < carried.ij.len() && Carried::key(carried.ij[k]) == now {
+                let (old_i, h) = (carried.ij[k].0, carried.hist[k]);
                 // a pair that started or stopped crossing the seam turned round: its history
                 // is relative (i against j), so it changes sign
-                *nh = if old_i == p.i { h } else { h.turned_round() };
+                *nh = if old_i == gi { h } else { h.turned_round() };
             }
         }
-        drop((touching, carried_ij, carried_hist));
+        drop((touching, carried));
         if new_pairs.capacity() > new_pairs.len() + 2 * spare(new_pairs.len()) {
             new_pairs.shrink_to(new_pairs.len() + spare(new_pairs.len()));
         }
         self.pairs = new_pairs;
         self.hist = new_hist;
-        // per-particle CSR
+        self.index(n);
+        self.builds += 1;
+    }
+
+    /// Makes the per-particle index (CSR `start`, `entries`) of `pairs` over `n` particles:
+    /// each particle's pairs in increasing pair index. A new list for the per-list plans
+    /// (`generation`).
+    pub fn index(&mut self, n: usize) {
         let mut count = vec![0u32; n + 1];
         for p in &self.pairs {
             count[p.i as usize + 1] += 1;
@@ -304,7 +392,6 @@ impl NeighborList {
             }
         }
         self.start = count;
-        self.builds += 1;
         self.generation += 1;
     }
 }

@@ -40,6 +40,15 @@ impl ShearSim {
     pub(super) fn rebuild(&mut self) -> Result<()> {
         let team = self.team();
         self.check_diverged(&team)?;
+        self.wrap();
+        self.nl
+            .build(&team, &self.x, &self.radius, self.skin, self.box_);
+        self.after_list(&team);
+        Ok(())
+    }
+
+    /// The periodic wrap of every position into [0, lx) x [0, lz) (LAMMPS `domain->pbc()`).
+    pub(super) fn wrap(&mut self) {
         let (lx, lz) = (self.box_.lx, self.box_.lz);
         // the wrap changes positions the drift packed
         self.packed_current = false;
@@ -55,13 +64,15 @@ impl ShearSim {
                 x[2] -= lz;
             }
         }
-        self.nl
-            .build(&team, &self.x, &self.radius, self.skin, self.box_);
+    }
+
+    /// What a rebuild does after the new pair list: the plates' part, the plate candidates,
+    /// the positions kept for the next `check_distance`, the per-pair buffers sized.
+    pub(super) fn after_list(&mut self, team: &Team) {
         self.rebuild_plates();
-        self.build_wall_candidates(&team);
+        self.build_wall_candidates(team);
         self.xhold.clone_from(&self.x);
         self.size_pair_buffers();
-        Ok(())
     }
 
     /// The cheap divergence check of every neighbour rebuild: every particle finite, inside
@@ -94,7 +105,7 @@ impl ShearSim {
                     "the run diverged: particle {} is at {:?} m with velocity {:?} m/s \
                      (box x 0..{lx:e}, y {ylo:e}..{yhi:e}, z 0..{lz:e}); a time step or a \
                      rolling stiffness too large for the contacts is the usual cause",
-                    i + 1,
+                    self.id_of(i) + 1,
                     self.x[i],
                     self.v[i]
                 ),
@@ -179,12 +190,17 @@ impl ShearSim {
             .collect();
         // each share's candidates in particle order, with its particles' counts; joined in
         // share order
-        let (x, radius) = (&self.x, &self.radius);
+        let (x, radius, ghost) = (&self.x, &self.radius, &self.ghost);
         let (th, n) = (team.threads(), x.len());
         let per: Vec<(Vec<WallCand>, Vec<u32>)> = team.map((0..th).collect(), |_, share| {
             let (mut c, mut counts) = (Vec::new(), Vec::with_capacity(bounds(n, th, share).len()));
             let mut window: Vec<u32> = Vec::new();
             for q in bounds(n, th, share) {
+                // a brick's ghost: its plate contacts are its owner's
+                if ghost.get(q) == Some(&true) {
+                    counts.push(0);
+                    continue;
+                }
                 let (p, r) = (&x[q], radius[q]);
                 let before = c.len();
                 for (m, mesh) in meshes.iter().enumerate() {

@@ -1,0 +1,904 @@
+//! One shear simulation decomposed into bricks (issue #39, docs/mpi.md): each brick a
+//! [`ShearSim`] over the particles it owns and its ghosts, stepping in lockstep with the
+//! others through a [`Transport`] (bricks as threads of one process here; MPI ranks behind
+//! the same trait), **every bit of the state that of one process** for any number of bricks
+//! and threads.
+//!
+//! Read from LAMMPS (comm_brick.cpp `exchange`, `borders`, `forward_comm`; fix
+//! contact/history's `pack_exchange`, which moves a particle's pair histories with it) and
+//! written our own way:
+//!
+//! - **Ownership** is decided at a neighbour rebuild, by the wrapped position
+//!   ([`Bricks::owner`]); between rebuilds a particle stays with its brick wherever it drifts
+//!   (it moves less than skin/2), as in LAMMPS.
+//! - **Ghosts** are every particle another brick owns within `2 r_max + skin` of this one
+//!   (every partner a pair of an own particle can have), chosen at the rebuild, kept with
+//!   their true coordinates: a pair finds its periodic image as one process does. A brick's
+//!   particles are held in increasing global id, ghosts among its own: its pair list is
+//!   then one process's list restricted to the pairs with an own member, in the same order,
+//!   so each own particle's pair sum adds the same terms in the same order
+//!   (`bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process`). A pair with
+//!   members in two bricks is computed in both (LIGGGHTS' newton off) from equal inputs, so
+//!   both copies of its history stay equal. Pairs of two ghosts are not listed.
+//! - **Every step**: the drift (a ghost's drift is discarded), the ghosts' positions and
+//!   velocities sent by their owners (`forward`), the plates moved (identically in every
+//!   brick), the skin/2 test OR-ed over the bricks, forces for the own particles, the plate
+//!   forces summed over every brick's share in increasing id (the order one process sums
+//!   them: [`sum_in_id_order`]), the final half-kick, and the servo (identically in every
+//!   brick, from the same sums).
+//! - **A rebuild** wraps the own particles, sends each one whose owner changed to its new
+//!   brick with every per-particle state it carries (velocities, force, torque, rotation,
+//!   plate contact records) and the histories of its pairs (`migrate`), then each brick
+//!   sends its new own particles near another brick to it as ghosts (`border`) and lists its
+//!   pairs, giving each touching pair its history by the pair's ids.
+//! - **Errors** (a diverged particle, too many plate contacts) are agreed on: every brick
+//!   stops at the same step, the one that found it with its message.
+//!
+//! A brick is made from the whole state ([`Brick::of`]: as it was at the last rebuild,
+//! without a new one) and gives it back ([`Brick::gather`]), so a run checkpointed from
+//! one decomposition resumes on another to the same bits.
+
+use super::bricks::{sum_in_id_order, Bricks};
+use super::neighbor::{Carried, Members, NeighborList, Pair};
+use super::{PairState, ShearSim, WallSlots};
+use crate::error::{Error, Result};
+use crate::solver::contact::{ContactHistory, ForceData};
+use crate::solver::vec3::V3;
+use std::any::Any;
+use std::sync::{Arc, Barrier, Mutex};
+
+/// What may travel between bricks: anything an MPI transport can serialise and the
+/// in-process one can move.
+pub trait Wire: serde::Serialize + serde::de::DeserializeOwned + Send + 'static {}
+impl<T: serde::Serialize + serde::de::DeserializeOwned + Send + 'static> Wire for T {}
+
+/// How bricks talk: each of `size` ranks calls every collective in the same order.
+pub trait Transport {
+    /// This brick's rank, `0..size`.
+    fn rank(&self) -> usize;
+    fn size(&self) -> usize;
+    /// All-to-all: `out[s]` is delivered to rank `s`; returns what each rank sent to this
+    /// one, by sender (this rank's own `out[rank]` included).
+    fn exchange<T: Wire>(&self, out: Vec<T>) -> Vec<T>;
+}
+
+/// Every rank's `mine`, by rank.
+pub fn all_gather<T: Wire + Clone>(t: &impl Transport, mine: T) -> Vec<T> {
+    t.exchange(vec![mine; t.size()])
+}
+
+/// True on every rank when `b` is true on any.
+pub fn any(t: &impl Transport, b: bool) -> bool {
+    all_gather(t, b).contains(&true)
+}
+
+/// Bricks as threads of one process: what the bit-identity tests run (no MPI needed), and a
+/// decomposition of one machine's run.
+pub struct InProcess {
+    rank: usize,
+    size: usize,
+    board: Arc<Board>,
+}
+
+/// The in-process mailboxes: rank r's outgoing values in `slots[r]` between two barriers.
+struct Board {
+    slots: Vec<Mutex<Option<Box<dyn Any + Send>>>>,
+    barrier: Barrier,
+}
+
+impl InProcess {
+    /// The `size` ranks of one group, one per thread to run.
+    pub fn group(size: usize) -> Vec<InProcess> {
+        let board = Arc::new(Board {
+            slots: (0..size).map(|_| Mutex::new(None)).collect(),
+            barrier: Barrier::new(size),
+        });
+        (0..size)
+            .map(|rank| InProcess {
+                rank,
+                size,
+                board: Arc::clone(&board),
+            })
+            .collect()
+    }
+}
+
+impl Transport for InProcess {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+
+    fn size(&self) -> usize {
+        self.size
+    }
+
+    fn exchange<T: Wire>(&self, out: Vec<T>) -> Vec<T> {
+        assert_eq!(out.len(), self.size, "one message per rank");
+        let lock = |r: usize| {
+            self.board.slots[r]
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+        };
+        let boxed: Vec<Option<T>> = out.into_iter().map(Some).collect();
+        *lock(self.rank) = Some(Box::new(boxed));
+        self.board.barrier.wait();
+        let got = (0..self.size)
+            .map(|r| {
+                let mut slot = lock(r);
+                let theirs = slot
+                    .as_mut()
+                    .and_then(|b| b.downcast_mut::<Vec<Option<T>>>())
+                    .expect("every rank exchanges the same type");
+                theirs[self.rank].take().expect("one message per rank")
+            })
+            .collect();
+        // no rank writes its slot again before every rank has read it
+        self.board.barrier.wait();
+        got
+    }
+}
+
+/// A particle moving to another brick: everything it carries from step to step.
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
+struct Migrant {
+    id: u32,
+    x: V3,
+    v: V3,
+    omega: V3,
+    f: V3,
+    torque: V3,
+    rotation: V3,
+    radius: f64,
+    mass: f64,
+    wall: WallSlots,
+}
+
+/// What one brick sends another at a rebuild: the particles moving there and the histories
+/// of their pairs (global ids).
+type Leaving = (Vec<Migrant>, Vec<((u32, u32), ContactHistory)>);
+
+/// A ghost as its owner sends it at a rebuild.
+#[derive(Clone, Copy, serde::Serialize, serde::Deserialize)]
+struct GhostRecord {
+    id: u32,
+    x: V3,
+    v: V3,
+    omega: V3,
+    radius: f64,
+    mass: f64,
+}
+
+/// An own particle as [`Brick::gather`] collects it.
+#[derive(Clone, serde::Serialize, serde::Deserialize)]
+struct Whole {
+    p: Migrant,
+    xhold: V3,
+    cand: Vec<(u8, u32, u8)>,
+}
+
+/// A listed pair as [`Brick::gather`] collects it: global ids, shift, history, and its state
+/// at the last force evaluation (what the records count).
+type GlobalPair = (Pair, ContactHistory, PairState);
+
+/// One brick's per-step share of the plate forces: its own particles with plate candidates
+/// `(id, bottom, top)`, and whether its force evaluation failed (and how).
+type PlateShare = (Option<String>, Vec<(u32, V3, V3)>);
+
+/// One brick of a decomposed shear simulation.
+pub struct Brick {
+    sim: ShearSim,
+    bricks: Bricks,
+    me: usize,
+    /// The ghost cutoff: `2 r_max + skin` over every particle of the run.
+    cut: f64,
+    /// Per rank, the local indices of own particles it holds as ghosts, in increasing id.
+    send: Vec<Vec<u32>>,
+    /// Per rank, the local indices of the ghosts it owns, in the order it sends them.
+    recv: Vec<Vec<u32>>,
+    /// Particles that arrived from other bricks at rebuilds (a statistic for tests).
+    pub arrived: u64,
+}
+
+impl Brick {
+    /// Brick `me` of `bricks` from the whole state `global` as it is (its own particles and
+    /// ghosts as the last rebuild chose them, from the positions then, `xhold`; no rebuild).
+    pub fn of(global: &ShearSim, bricks: Bricks, me: usize) -> Brick {
+        let rmax = global.radius.iter().cloned().fold(0.0, f64::max);
+        let cut = 2.0 * rmax + global.skin;
+        let held = global.xhold.clone();
+        let (ids, own) = bricks.members(me, &held, cut);
+        let ghost: Vec<bool> = own.iter().map(|o| !o).collect();
+        let local_of = |g: usize| ids.binary_search(&g).ok();
+        let pick = |v: &[V3]| ids.iter().map(|&q| v[q]).collect::<Vec<V3>>();
+        // the pairs with an own member, in list order (increasing key: local order is id
+        // order), their histories with them
+        let mut nl = NeighborList {
+            builds: global.nl.builds,
+            ..Default::default()
+        };
+        for (p, h) in global.nl.pairs.iter().zip(&global.nl.hist) {
+            let (i, j) = (local_of(p.i as usize), local_of(p.j as usize));
+            if let (Some(i), Some(j)) = (i, j) {
+                if own[i] || own[j] {
+                    nl.pairs.push(Pair {
+                        i: i as u32,
+                        j: j as u32,
+                        shift: p.shift,
+                    });
+                    nl.hist.push(*h);
+                }
+            }
+        }
+        nl.index(ids.len());
+        let mut wall_start = vec![0u32];
+        let mut wall_cand = Vec::new();
+        for (&q, &o) in ids.iter().zip(&own) {
+            if o {
+                let s = &global.wall_start;
+                wall_cand.extend_from_slice(&global.wall_cand[s[q] as usize..s[q + 1] as usize]);
+            }
+            wall_start.push(wall_cand.len() as u32);
+        }
+        let n = ids.len();
+        let mut sim = ShearSim {
+            x: pick(&global.x),
+            v: pick(&global.v),
+            omega: pick(&global.omega),
+            f: pick(&global.f),
+            torque: pick(&global.torque),
+            radius: ids.iter().map(|&q| global.radius[q]).collect(),
+            mass: ids.iter().map(|&q| global.mass[q]).collect(),
+            kick: ids.iter().map(|&q| global.kick[q]).collect(),
+            rotation: pick(&global.rotation),
+            xhold: pick(&global.xhold),
+            wall: ids
+                .iter()
+                .zip(&own)
+                .map(|(&q, &o)| {
+                    if o {
+                        global.wall[q].clone()
+                    } else {
+                        WallSlots::default()
+                    }
+                })
+                .collect(),
+            nl,
+            wall_start,
+            wall_cand,
+            ids: ids.iter().map(|&q| q as u32).collect(),
+            ghost,
+            ..ShearSim::without_particles(global)
+        };
+        sim.size_particle_buffers(n);
+        sim.size_pair_buffers();
+        // who sends whom which ghosts: the same rule on every brick
+        let mut send = vec![Vec::new(); bricks.count()];
+        let mut recv = vec![Vec::new(); bricks.count()];
+        for (l, &q) in ids.iter().enumerate() {
+            if own[l] {
+                for (s, list) in send.iter_mut().enumerate() {
+                    if s != me && bricks.holds(s, held[q], cut) {
+                        list.push(l as u32);
+                    }
+                }
+            } else {
+                recv[bricks.owner(held[q])].push(l as u32);
+            }
+        }
+        Brick {
+            sim,
+            bricks,
+            me,
+            cut,
+            send,
+            recv,
+            arrived: 0,
+        }
+    }
+
+    /// This brick's simulation (its own particles and ghosts).
+    pub fn sim(&self) -> &ShearSim {
+        &self.sim
+    }
+
+    /// How many particles this brick owns.
+    pub fn owned(&self) -> usize {
+        self.sim.ghost.iter().filter(|g| !**g).count()
+    }
+
+    /// A run's setup ([`ShearSim::setup`]) in every brick: the stage speed, a rebuild, and
+    /// forces without history update.
+    pub fn setup(&mut self, t: &impl Transport, bottom_speed: f64) -> Result<()> {
+        self.sim.setup_plates(bottom_speed);
+        self.rebuild(t)?;
+        let local = self.sim.forces_and_kick(false, false);
+        self.plate_forces(t, local).map(|_| ())
+    }
+
+    /// One time step ([`ShearSim::step`]) in every brick.
+    pub fn step(&mut self, t: &impl Transport) -> Result<()> {
+        let moved = self.sim.drift();
+        self.forward(t);
+        self.sim.move_plates();
+        self.sim.lap(|p| &mut p.plates);
+        let moved = any(t, moved);
+        if self.sim.decide_rebuild(moved) {
+            self.rebuild(t)?;
+        } else {
+            self.sim.mesh_rebuild_pending = self.sim.plates_moved();
+        }
+        self.sim.lap(|p| &mut p.neighbor);
+        let local = self.sim.forces_of_step();
+        let kicked = self.plate_forces(t, local)?;
+        self.sim.finish_step(kicked);
+        Ok(())
+    }
+
+    /// The ghosts' positions and velocities from their owners (LAMMPS `forward_comm`), after
+    /// the drift: what the pair pass reads of them.
+    fn forward(&mut self, t: &impl Transport) {
+        let s = &self.sim;
+        let out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|list| {
+                let mut buf = Vec::with_capacity(9 * list.len());
+                for &l in list {
+                    let l = l as usize;
+                    buf.extend_from_slice(&s.x[l]);
+                    buf.extend_from_slice(&s.v[l]);
+                    buf.extend_from_slice(&s.omega[l]);
+                }
+                buf
+            })
+            .collect();
+        let got = t.exchange(out);
+        let s = &mut self.sim;
+        for (list, buf) in self.recv.iter().zip(&got) {
+            assert_eq!(buf.len(), 9 * list.len(), "ghost message of another length");
+            for (&l, rec) in list.iter().zip(buf.chunks_exact(9)) {
+                let l = l as usize;
+                s.x[l] = [rec[0], rec[1], rec[2]];
+                s.v[l] = [rec[3], rec[4], rec[5]];
+                s.omega[l] = [rec[6], rec[7], rec[8]];
+                if let Some(p) = s.packed.get_mut(l) {
+                    p.moved(s.x[l], s.v[l], s.omega[l]);
+                }
+            }
+        }
+    }
+
+    /// The plate forces of this evaluation, summed over every brick's own particles in
+    /// increasing id (one process's order and bits), kept as the plates' forces; `local`
+    /// is this brick's force evaluation (true when it kicked). An error anywhere is an error
+    /// everywhere.
+    fn plate_forces(&mut self, t: &impl Transport, local: Result<bool>) -> Result<bool> {
+        let s = &self.sim;
+        let share: Vec<(u32, V3, V3)> = (0..s.x.len())
+            .filter(|&q| s.wall_start[q] != s.wall_start[q + 1])
+            .map(|q| (s.ids[q], s.wall_force[q].0, s.wall_force[q].1))
+            .collect();
+        let (failed, kicked) = match &local {
+            Ok(k) => (None, *k),
+            Err(e) => (Some(e.to_string()), false),
+        };
+        let all: Vec<PlateShare> = all_gather(t, (failed, share));
+        agree(local, all.iter().map(|(e, _)| e.clone()), self.sim.step)?;
+        let shares: Vec<Vec<(u32, V3, V3)>> = all.into_iter().map(|(_, s)| s).collect();
+        let (tb, tt) = sum_in_id_order(&shares);
+        self.sim.keep_plate_forces(tb, tt)?;
+        Ok(kicked)
+    }
+
+    /// A neighbour rebuild of every brick ([`ShearSim::rebuild`]): the divergence check,
+    /// the wrap, migration, ghosts, the pair list, the plates' part and the plate candidates.
+    fn rebuild(&mut self, t: &impl Transport) -> Result<()> {
+        let team = self.sim.team();
+        let checked = self.sim.check_diverged(&team);
+        let said: Vec<Option<String>> =
+            all_gather(t, checked.as_ref().err().map(|e| e.to_string()));
+        agree(checked, said, self.sim.step)?;
+        self.sim.wrap();
+        let over = Members {
+            ids: &self.sim.ids,
+            ghost: &self.sim.ghost,
+        };
+        let carried = self.sim.nl.take_carried(over);
+        let (mine, carried) = self.migrate(t, carried);
+        self.border(t, mine);
+        let s = &mut self.sim;
+        let over = Members {
+            ids: &s.ids,
+            ghost: &s.ghost,
+        };
+        s.nl.build_over(&team, &s.x, &s.radius, s.skin, s.box_, over, carried);
+        s.after_list(&team);
+        Ok(())
+    }
+
+    /// Sends every own particle whose owner changed to its new brick with the histories of
+    /// its pairs (LAMMPS `exchange`, fix contact/history's `pack_exchange`); returns this
+    /// brick's own particles after it, in increasing id, and the histories to carry into its
+    /// new list (its own and those that came with its new particles).
+    fn migrate(&mut self, t: &impl Transport, mut carried: Carried) -> (Vec<Migrant>, Carried) {
+        let s = &mut self.sim;
+        let size = self.bricks.count();
+        let mut leaving: Vec<Leaving> = vec![Default::default(); size];
+        let mut mine = Vec::new();
+        let mut gone = std::collections::HashMap::new();
+        for q in 0..s.x.len() {
+            if s.ghost[q] {
+                continue;
+            }
+            let m = Migrant {
+                id: s.ids[q],
+                x: s.x[q],
+                v: s.v[q],
+                omega: s.omega[q],
+                f: s.f[q],
+                torque: s.torque[q],
+                rotation: s.rotation[q],
+                radius: s.radius[q],
+                mass: s.mass[q],
+                wall: std::mem::take(&mut s.wall[q]),
+            };
+            let to = self.bricks.owner(m.x);
+            if to == self.me {
+                mine.push(m);
+            } else {
+                gone.insert(m.id, to);
+                leaving[to].0.push(m);
+            }
+        }
+        for (ij, h) in carried.ij.iter().zip(&carried.hist) {
+            let a = gone.get(&ij.0);
+            let b = gone.get(&ij.1).filter(|b| Some(*b) != a);
+            for &to in a.into_iter().chain(b) {
+                leaving[to].1.push((*ij, *h));
+            }
+        }
+        let got = t.exchange(leaving);
+        for (from, (people, hist)) in got.into_iter().enumerate() {
+            if from == self.me {
+                continue;
+            }
+            self.arrived += people.len() as u64;
+            mine.extend(people);
+            carried.merge(hist);
+        }
+        mine.sort_by_key(|m| m.id);
+        (mine, carried)
+    }
+
+    /// Sends each own particle to every other brick it is near as a ghost (LAMMPS
+    /// `borders`), and makes this brick's particles its own `mine` and the ghosts it
+    /// received, in increasing id, with the send and receive lists of `forward`.
+    fn border(&mut self, t: &impl Transport, mine: Vec<Migrant>) {
+        let size = self.bricks.count();
+        let mut out: Vec<Vec<GhostRecord>> = vec![Vec::new(); size];
+        for m in &mine {
+            for (b, list) in out.iter_mut().enumerate() {
+                if b != self.me && self.bricks.holds(b, m.x, self.cut) {
+                    list.push(GhostRecord {
+                        id: m.id,
+                        x: m.x,
+                        v: m.v,
+                        omega: m.omega,
+                        radius: m.radius,
+                        mass: m.mass,
+                    });
+                }
+            }
+        }
+        let sent: Vec<Vec<u32>> = out
+            .iter()
+            .map(|l| l.iter().map(|g| g.id).collect())
+            .collect();
+        let got = t.exchange(out);
+        // every particle once, in increasing id: (id, own record or (ghost, sender))
+        enum Held {
+            Own(Box<Migrant>),
+            Ghost(GhostRecord, usize),
+        }
+        let mut all: Vec<(u32, Held)> = mine
+            .into_iter()
+            .map(|m| (m.id, Held::Own(Box::new(m))))
+            .chain(
+                got.into_iter()
+                    .enumerate()
+                    .flat_map(|(r, l)| l.into_iter().map(move |g| (g.id, Held::Ghost(g, r)))),
+            )
+            .collect();
+        all.sort_by_key(|e| e.0);
+        let n = all.len();
+        let s = &mut self.sim;
+        let nve = s.nve;
+        s.ids = all.iter().map(|e| e.0).collect();
+        s.ghost = all.iter().map(|e| matches!(e.1, Held::Ghost(..))).collect();
+        s.x.clear();
+        s.v.clear();
+        s.omega.clear();
+        s.f.clear();
+        s.torque.clear();
+        s.rotation.clear();
+        s.radius.clear();
+        s.mass.clear();
+        s.wall.clear();
+        self.recv = vec![Vec::new(); size];
+        for (l, (_, h)) in all.into_iter().enumerate() {
+            let (x, v, w, f, tq, rot, r, m, wall) = match h {
+                Held::Own(m) => {
+                    let m = *m;
+                    (
+                        m.x, m.v, m.omega, m.f, m.torque, m.rotation, m.radius, m.mass, m.wall,
+                    )
+                }
+                Held::Ghost(g, from) => {
+                    self.recv[from].push(l as u32);
+                    let z = [0.0; 3];
+                    (
+                        g.x,
+                        g.v,
+                        g.omega,
+                        z,
+                        z,
+                        z,
+                        g.radius,
+                        g.mass,
+                        WallSlots::default(),
+                    )
+                }
+            };
+            s.x.push(x);
+            s.v.push(v);
+            s.omega.push(w);
+            s.f.push(f);
+            s.torque.push(tq);
+            s.rotation.push(rot);
+            s.radius.push(r);
+            s.mass.push(m);
+            s.wall.push(wall);
+        }
+        s.kick = s
+            .radius
+            .iter()
+            .zip(&s.mass)
+            .map(|(r, m)| nve.kick(*r, *m))
+            .collect();
+        s.size_particle_buffers(n);
+        let ids = &s.ids;
+        self.send = sent
+            .into_iter()
+            .map(|l| {
+                l.into_iter()
+                    .map(|g| ids.binary_search(&g).expect("an own particle") as u32)
+                    .collect()
+            })
+            .collect();
+    }
+
+    /// The whole state on every rank ([`Brick::of`]'s inverse: one process's state, bit for
+    /// bit, when every brick stepped as one process does): what checkpoints, outputs and the
+    /// tests read. What is not per particle (plates, servo, step, rebuild state) every brick
+    /// holds alike: this brick's.
+    pub fn gather(&self, t: &impl Transport) -> ShearSim {
+        let s = &self.sim;
+        let own: Vec<usize> = (0..s.x.len()).filter(|&q| !s.ghost[q]).collect();
+        let wholes: Vec<Whole> = own
+            .iter()
+            .map(|&q| Whole {
+                p: Migrant {
+                    id: s.ids[q],
+                    x: s.x[q],
+                    v: s.v[q],
+                    omega: s.omega[q],
+                    f: s.f[q],
+                    torque: s.torque[q],
+                    rotation: s.rotation[q],
+                    radius: s.radius[q],
+                    mass: s.mass[q],
+                    wall: s.wall[q].clone(),
+                },
+                xhold: s.xhold[q],
+                cand: s.wall_cand[s.wall_start[q] as usize..s.wall_start[q + 1] as usize].to_vec(),
+            })
+            .collect();
+        let pairs: Vec<GlobalPair> =
+            s.nl.pairs
+                .iter()
+                .zip(&s.nl.hist)
+                .zip(&s.pair_state)
+                .map(|((p, h), st)| {
+                    let g = Pair {
+                        i: s.ids[p.i as usize],
+                        j: s.ids[p.j as usize],
+                        shift: p.shift,
+                    };
+                    (g, *h, *st)
+                })
+                .collect();
+        let all: Vec<(Vec<Whole>, Vec<GlobalPair>)> = all_gather(t, (wholes, pairs));
+        let mut wholes: Vec<Whole> = Vec::new();
+        let mut pairs: Vec<GlobalPair> = Vec::new();
+        for (w, p) in all {
+            wholes.extend(w);
+            pairs.extend(p);
+        }
+        wholes.sort_by_key(|w| w.p.id);
+        assert!(
+            wholes.iter().enumerate().all(|(k, w)| w.p.id as usize == k),
+            "every particle owned once"
+        );
+        pairs.sort_by_key(|(p, ..)| Carried::key((p.i, p.j)));
+        pairs.dedup_by_key(|(p, ..)| Carried::key((p.i, p.j)));
+        let n = wholes.len();
+        let mut nl = NeighborList {
+            builds: s.nl.builds,
+            ..Default::default()
+        };
+        let mut pair_state = Vec::with_capacity(pairs.len());
+        for (p, h, st) in pairs {
+            nl.pairs.push(p);
+            nl.hist.push(h);
+            pair_state.push(st);
+        }
+        nl.index(n);
+        let mut wall_start = vec![0u32];
+        let mut wall_cand = Vec::new();
+        for w in &wholes {
+            wall_cand.extend_from_slice(&w.cand);
+            wall_start.push(wall_cand.len() as u32);
+        }
+        let col = |f: fn(&Whole) -> V3| wholes.iter().map(f).collect::<Vec<V3>>();
+        let mut g = ShearSim {
+            x: col(|w| w.p.x),
+            v: col(|w| w.p.v),
+            omega: col(|w| w.p.omega),
+            f: col(|w| w.p.f),
+            torque: col(|w| w.p.torque),
+            rotation: col(|w| w.p.rotation),
+            xhold: col(|w| w.xhold),
+            radius: wholes.iter().map(|w| w.p.radius).collect(),
+            mass: wholes.iter().map(|w| w.p.mass).collect(),
+            kick: wholes
+                .iter()
+                .map(|w| s.nve.kick(w.p.radius, w.p.mass))
+                .collect(),
+            wall: wholes.iter().map(|w| w.p.wall.clone()).collect(),
+            nl,
+            wall_start,
+            wall_cand,
+            ..ShearSim::without_particles(s)
+        };
+        g.size_particle_buffers(n);
+        g.pair_state = pair_state;
+        g.size_pair_buffers();
+        g
+    }
+}
+
+/// Every brick's word on one collective step: Ok when no brick failed; else this brick's own
+/// error, or the first other brick's message.
+fn agree<T>(
+    local: Result<T>,
+    said: impl IntoIterator<Item = Option<String>>,
+    step: u64,
+) -> Result<T> {
+    let first = said.into_iter().flatten().next();
+    match (local, first) {
+        (Err(e), _) => Err(e),
+        (Ok(_), Some(msg)) => Err(Error::Solver {
+            step,
+            msg: format!("another brick stopped: {msg}"),
+        }),
+        (Ok(v), None) => Ok(v),
+    }
+}
+
+impl ShearSim {
+    /// Every field of `like` but the per-particle ones and the pair list (empty here):
+    /// what a brick, or a state gathered from bricks, fills in.
+    fn without_particles(like: &ShearSim) -> ShearSim {
+        ShearSim {
+            skin: like.skin,
+            rebuild_every: like.rebuild_every,
+            rebuild_check: like.rebuild_check,
+            params: like.params,
+            nve: like.nve,
+            box_: like.box_,
+            box_y: like.box_y,
+            x: Vec::new(),
+            v: Vec::new(),
+            omega: Vec::new(),
+            f: Vec::new(),
+            torque: Vec::new(),
+            radius: Vec::new(),
+            mass: Vec::new(),
+            kick: Vec::new(),
+            rotation: Vec::new(),
+            nl: NeighborList::default(),
+            xhold: Vec::new(),
+            pair_force: Vec::new(),
+            record_pair_forces: false,
+            acc: Vec::new(),
+            packed: Vec::new(),
+            packed_current: false,
+            pair_state: Vec::new(),
+            pair_damp: Vec::new(),
+            imp: Vec::new(),
+            implicit: like.implicit,
+            wall: Vec::new(),
+            wall_force: Vec::new(),
+            wall_start: vec![0],
+            wall_cand: Vec::new(),
+            meshes: like.meshes.clone(),
+            top_orig: like.top_orig.clone(),
+            bottom: like.bottom,
+            top: like.top,
+            top_base0: like.top_base0,
+            servo: like.servo.clone(),
+            bottom_speed: like.bottom_speed,
+            bottom_node_v: like.bottom_node_v,
+            shear_displacement: like.shear_displacement,
+            bottom_hold: like.bottom_hold,
+            top_hold: like.top_hold,
+            force_time_velocities: None,
+            ago: like.ago,
+            mesh_rebuild_pending: like.mesh_rebuild_pending,
+            step: like.step,
+            top_force: like.top_force,
+            bottom_force: like.bottom_force,
+            kernel: like.kernel,
+            phases: None,
+            team: None,
+            plan: Default::default(),
+            ids: Vec::new(),
+            ghost: Vec::new(),
+        }
+    }
+
+    /// Sizes the per-particle scratch of `n` particles: the pair sums (zero), the plate
+    /// forces, epsd_implicit's dashpot sums; the SIMD records are made anew by the next pass.
+    fn size_particle_buffers(&mut self, n: usize) {
+        self.acc = vec![ForceData::default(); n];
+        self.wall_force = vec![([0.0; 3], [0.0; 3]); n];
+        if self.implicit {
+            self.imp = vec![([0.0; 6], [0.0; 3]); n];
+        }
+        self.packed = Vec::new();
+        self.packed_current = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::packing::loose_packing;
+    use crate::solver::contact::models::RollingModel;
+    use crate::solver::shear::tests::state_bytes;
+    use crate::solver::shear::{compact, Packing};
+    use crate::solver::team::on_threads;
+    use crate::spec::shear::{Preset, ShearCase};
+
+    /// `global` run as `nx` x `nz` bricks (threads of this process, each with `threads`
+    /// threads of its own): with `speed` a run's setup first, then `steps` steps; the whole
+    /// state gathered, and how many particles changed brick.
+    fn in_bricks(
+        global: &ShearSim,
+        (nx, nz): (usize, usize),
+        threads: usize,
+        speed: Option<f64>,
+        steps: u64,
+    ) -> (ShearSim, u64) {
+        let bricks = Bricks {
+            nx,
+            nz,
+            lx: global.box_.lx,
+            lz: global.box_.lz,
+        };
+        let ends: Vec<(ShearSim, u64)> = std::thread::scope(|scope| {
+            let runs: Vec<_> = InProcess::group(bricks.count())
+                .into_iter()
+                .map(|t| {
+                    scope.spawn(move || {
+                        on_threads(threads, || {
+                            let mut b = Brick::of(global, bricks, t.rank());
+                            if let Some(v) = speed {
+                                b.setup(&t, v).unwrap();
+                            }
+                            for _ in 0..steps {
+                                b.step(&t).unwrap();
+                            }
+                            let moved = all_gather(&t, b.arrived).iter().sum();
+                            (b.gather(&t), moved)
+                        })
+                    })
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        });
+        let (one, moved) = &ends[0];
+        for (other, _) in &ends[1..] {
+            assert!(
+                state_bytes(other) == state_bytes(one),
+                "every brick gathers alike"
+            );
+        }
+        (one.clone(), *moved)
+    }
+
+    fn dense() -> (ShearCase, Packing) {
+        let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 4).unwrap();
+        let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
+        (c, dense)
+    }
+
+    /// The fast preset's 2,500 particles sheared 1,500 steps from a dense state (rebuilds,
+    /// particles changing brick, plate contacts, both rolling dashpots): every bit of the
+    /// state (particles, forces, rotations, pair list and histories, plate records and
+    /// candidates, plates, servo, rebuild state) that of one process, for 1, 2, 3 and 2 x 2
+    /// bricks on 1 and 2 threads each.
+    #[test]
+    fn bricks_give_one_process_bits_for_any_split_and_thread_count() {
+        let (_, dense) = dense();
+        for model in [RollingModel::Epsd, RollingModel::EpsdImplicit] {
+            let c = ShearCase::preset(Preset::Fast, model, 0.5, 0.5, 4).unwrap();
+            let fresh = ShearSim::new(&c.setup(), &dense);
+            let speed = c.stages[0].speed;
+            let steps = 1500;
+            let one = on_threads(1, || {
+                let mut s = fresh.clone();
+                s.setup(speed).unwrap();
+                for _ in 0..steps {
+                    s.step().unwrap();
+                }
+                s
+            });
+            assert!(one.nl.builds >= 5, "{model}: {} rebuilds", one.nl.builds);
+            assert!(one.wall.iter().any(|w| !w.rec.is_empty()));
+            let reference = state_bytes(&one);
+            for (split, threads) in [
+                ((1, 1), 2),
+                ((2, 1), 1),
+                ((2, 1), 2),
+                ((3, 1), 1),
+                ((3, 1), 2),
+                ((2, 2), 1),
+            ] {
+                let (got, moved) = in_bricks(&fresh, split, threads, Some(speed), steps);
+                assert!(
+                    state_bytes(&got) == reference,
+                    "{model}: {split:?} bricks on {threads} threads differ from one process"
+                );
+                // and what a run's outputs read of it
+                assert_eq!(format!("{:?}", got.record()), format!("{:?}", one.record()));
+                if split != (1, 1) {
+                    assert!(moved > 0, "{model}: {split:?}: no particle changed brick");
+                }
+                eprintln!("{model}: {split:?} bricks x {threads} threads: one process's bits ({moved} particles changed brick)");
+            }
+        }
+    }
+
+    /// A run stopped on 2 bricks and resumed on 3 from its checkpoint form (the gathered
+    /// state through the checkpoint's serialisation) ends with one process's bits.
+    #[test]
+    fn a_run_stopped_on_two_bricks_resumes_on_three_to_the_same_bits() {
+        let (c, dense) = dense();
+        let fresh = ShearSim::new(&c.setup(), &dense);
+        let speed = c.stages[0].speed;
+        let one = on_threads(1, || {
+            let mut s = fresh.clone();
+            s.setup(speed).unwrap();
+            for _ in 0..1200 {
+                s.step().unwrap();
+            }
+            s
+        });
+        let (half, _) = in_bricks(&fresh, (2, 1), 1, Some(speed), 500);
+        let bytes = rmp_serde::to_vec(&half).unwrap();
+        let resumed: ShearSim = rmp_serde::from_slice(&bytes).unwrap();
+        let (end, _) = in_bricks(&resumed, (3, 1), 1, None, 700);
+        assert!(state_bytes(&end) == state_bytes(&one));
+    }
+}
