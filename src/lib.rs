@@ -17,6 +17,7 @@ pub mod fsutil;
 pub mod liggghts;
 pub mod packing;
 pub mod profile;
+pub mod ranks;
 pub mod report;
 pub mod rotation_map;
 pub mod run;

@@ -94,6 +94,18 @@ impl Liggghts {
             None => Command::new(&self.binary),
         };
         die_with_parent(&mut cmd);
+        // LIGGGHTS is an MPI program of its own: started by a rank of `mpirun` (a decomposed
+        // native run, issue #39) it would read that job's launcher variables and fail in
+        // MPI_Init ("ompi_rte_init failed"); it starts as its own job
+        for (k, _) in std::env::vars_os() {
+            let k = k.to_string_lossy();
+            if ["OMPI_", "PMIX_", "PMI_", "OPAL_", "ORTE_"]
+                .iter()
+                .any(|p| k.starts_with(p))
+            {
+                cmd.env_remove(k.as_ref());
+            }
+        }
         let mut child = cmd
             .args(["-in", DECK_NAME, "-log", LOG_NAME])
             .current_dir(dir)

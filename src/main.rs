@@ -29,6 +29,23 @@ fn main() -> ExitCode {
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
     }
+    // under mpirun (the `mpi` feature): rank 0 runs the command, each native run decomposed
+    // over the ranks; the other ranks serve those runs and end with it (issue #39)
+    let _lead = match dem_verify::ranks::start() {
+        dem_verify::ranks::Start::Alone => None,
+        dem_verify::ranks::Start::Lead(lead) => Some(lead),
+        dem_verify::ranks::Start::Refused(why) => {
+            eprintln!("error: {why}");
+            return ExitCode::from(2);
+        }
+        #[cfg(feature = "mpi")]
+        dem_verify::ranks::Start::Serve(world) => {
+            dem_verify::shear::serve(&world);
+            drop(world);
+            dem_verify::ranks::finish();
+            return ExitCode::SUCCESS;
+        }
+    };
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
     let matches = match Cli::command().try_get_matches() {

@@ -11,6 +11,7 @@ use crate::packing::Packing;
 use crate::profile::{profiles, ProfileSample, VelocityProfile};
 use crate::run::progress::Progress;
 use crate::series::Series;
+use crate::solver::shear::decompose::Stepper;
 use crate::solver::shear::plate::{plate_triangles, Plate, Side};
 use crate::solver::shear::{PlateRecord, ShearSim};
 use crate::spec::shear::ShearCase;
@@ -229,6 +230,10 @@ fn load_checkpoint(out: &Path, case_json: &str) -> Option<NativeCheckpoint> {
 /// With `checkpointing` on, the run writes `out/native_checkpoint.bin` ([`NativeCheckpoint`])
 /// at output steps and resumes from it when called again with the same case: the finished
 /// run is bit-identical to one never interrupted. The checkpoint is deleted when the run ends.
+///
+/// Under `mpirun` (the `mpi` feature, issue #39) the run is decomposed over the ranks
+/// ([`crate::ranks`]): this rank (0) hands the initial state to the others and steps brick 0;
+/// the outputs, identical to one process's, are written here.
 pub fn run_native(
     case: &ShearCase,
     packing: &Packing,
@@ -237,135 +242,65 @@ pub fn run_native(
     checkpointing: Checkpointing,
 ) -> Result<CodeRun> {
     let t0 = Instant::now();
-    let ends = case.run_ends();
-    let windows = schedule(case);
-    let rec = |sim: &ShearSim| Row::from(&sim.record());
     let case_json = serde_json::to_string(case)?;
     let resumed = match checkpointing {
         Checkpointing::Off => None,
         Checkpointing::Every(_) => load_checkpoint(out, &case_json),
     };
-    let (mut sim, mut rows, mut compacted, mut profile, first_stage, wall_before) = match resumed {
+    let (sim, mut run, first_stage) = match resumed {
         Some(cp) => {
             progress.resume_at(
                 cp.sim.step,
                 &format!("resumed from checkpoint at step {}", cp.sim.step),
             );
-            (
-                cp.sim,
-                cp.rows,
-                cp.compacted,
-                cp.profile,
-                cp.stage,
-                cp.wall_time,
-            )
+            let run = NativeLoop {
+                rows: cp.rows,
+                compacted: cp.compacted,
+                profile: cp.profile,
+                wall_before: cp.wall_time,
+                t0,
+            };
+            (cp.sim, run, cp.stage)
         }
         None => (
             ShearSim::new(&case.setup(), packing),
-            Vec::new(),
-            None,
-            Vec::new(),
+            NativeLoop::new(t0),
             0,
-            0.0,
         ),
     };
-    let mut last_checkpoint = Instant::now();
-    let result = (|| -> Result<()> {
-        if first_stage == 0 && sim.step == 0 {
-            sim.setup(0.0)?;
-            rows.push(rec(&sim));
-            // the initial state, as LIGGGHTS' dump writes it at its first run's setup
-            if case.snapshot_every > 0 {
-                vtk::write_snapshot(&out.join("vtk"), &sim.snapshot(), case.dt)?;
-            }
+    let writes = Writes {
+        out,
+        progress,
+        checkpointing,
+        case_json: &case_json,
+    };
+    let result = step_native(case, packing, sim, first_stage, |stepper| {
+        drive(case, packing, Some(&writes), stepper, first_stage, &mut run)
+    });
+    let last = match result {
+        Ok(last) => last,
+        Err(e) => {
+            let _ = shear_series(case, &run.rows).write_csv(&out.join("native_partial.csv"));
+            return Err(e);
         }
-        for (k, &end) in ends.iter().enumerate().skip(first_stage) {
-            // a stage starts with its setup; a run resumed inside the stage is past it
-            if k > 0 && sim.step == ends[k - 1] {
-                sim.setup(case.stages[k - 1].speed)?;
-            }
-            while sim.step < end {
-                sim.step()?;
-                let output = is_output(case, sim.step, &ends);
-                if output {
-                    sim.check_finite()?;
-                    let lost = sim.lost_particles(packing.box_y_lo, packing.box_y_hi);
-                    if lost > 0 {
-                        return Err(Error::Solver {
-                            step: sim.step,
-                            msg: format!("{lost} particles left the box through a plate"),
-                        });
-                    }
-                    rows.push(rec(&sim));
-                    progress.set(sim.step);
-                }
-                if is_sample(&windows, sim.step) {
-                    profile.push(ProfileSample {
-                        step: sim.step,
-                        top_y: sim.record().top_y,
-                        y: sim.x.iter().map(|x| x[1]).collect(),
-                        vx: sim.v.iter().map(|v| v[0]).collect(),
-                    });
-                }
-                if case.snapshot_every > 0 && sim.step.is_multiple_of(case.snapshot_every) {
-                    vtk::write_snapshot(&out.join("vtk"), &sim.snapshot(), case.dt)?;
-                }
-                if let Checkpointing::Every(every) = checkpointing {
-                    if output && last_checkpoint.elapsed() >= every && sim.step < end {
-                        // the stage index is k here; a checkpoint at a stage's last step
-                        // would need the next stage's setup, so none is taken there
-                        let cp = NativeCheckpoint {
-                            stage: k,
-                            wall_time: wall_before + t0.elapsed().as_secs_f64(),
-                            sim: sim.clone(),
-                            rows: rows.clone(),
-                            compacted: compacted.clone(),
-                            profile: profile.clone(),
-                        };
-                        let bytes = rmp_serde::to_vec(&cp).map_err(|e| Error::Solver {
-                            step: sim.step,
-                            msg: format!("cannot encode the checkpoint: {e}"),
-                        })?;
-                        write_atomic(
-                            &out.join(CHECKPOINT_NAME),
-                            &crate::fsutil::seal(
-                                CHECKPOINT_KIND,
-                                CHECKPOINT_VERSION,
-                                case_json.as_bytes(),
-                                &bytes,
-                            ),
-                        )?;
-                        last_checkpoint = Instant::now();
-                    }
-                }
-            }
-            if k == 0 {
-                compacted = Some(sim.state(packing));
-            }
-        }
-        Ok(())
-    })();
-    if let Err(e) = result {
-        let _ = shear_series(case, &rows).write_csv(&out.join("native_partial.csv"));
-        return Err(e);
-    }
+    };
     progress.finish();
     // the paper's rotation map of the final state (rotations accumulated over the whole run)
     crate::rotation_map::rotation_map(
         &out.join("rotation_map.svg"),
         &format!(
             "native, mu_r {}, eta_r {}, seed {}: accumulated rotation at step {}",
-            case.material.rolling_friction, case.material.rolling_damping, case.seed, sim.step
+            case.material.rolling_friction, case.material.rolling_damping, case.seed, last.step
         ),
-        &sim.snapshot(),
+        &last.snapshot(),
         case.box_x,
     )?;
-    let run = CodeRun {
-        rows,
-        wall_time: wall_before + t0.elapsed().as_secs_f64(),
-        steps: sim.step,
-        compacted,
-        profiles: profiles(case, &profile)?,
+    let code_run = CodeRun {
+        wall_time: run.wall_before + t0.elapsed().as_secs_f64(),
+        rows: run.rows,
+        steps: last.step,
+        compacted: run.compacted,
+        profiles: profiles(case, &run.profile)?,
         resumed_from: Vec::new(),
     };
     match std::fs::remove_file(out.join(CHECKPOINT_NAME)) {
@@ -374,7 +309,260 @@ pub fn run_native(
         }
         _ => {}
     }
-    Ok(run)
+    Ok(code_run)
+}
+
+/// Runs `f` (a native run's time loop) on this process's stepper of a run of `case` from
+/// `sim` at `first_stage`: `sim` itself in one process; under `mpirun` (the `mpi` feature)
+/// brick 0 of the run decomposed over the ranks, which are handed the run here
+/// ([`crate::ranks`], [`serve`]).
+fn step_native(
+    case: &ShearCase,
+    packing: &Packing,
+    sim: ShearSim,
+    first_stage: usize,
+    f: impl FnOnce(&mut dyn Stepper) -> Result<ShearSim>,
+) -> Result<ShearSim> {
+    #[cfg(feature = "mpi")]
+    if let Some(world) = crate::ranks::world() {
+        use crate::solver::shear::decompose::{split_for, Brick, BrickRun, Transport};
+        let job = crate::ranks::Job {
+            case: case.clone(),
+            packing: packing.clone(),
+            sim,
+            first_stage,
+            threads: rayon::current_num_threads(),
+        };
+        let _turn = crate::ranks::hand_out(&world, &job);
+        let bricks = split_for(world.size(), case.box_x, case.box_z);
+        eprintln!(
+            "native run decomposed over {} MPI ranks: {} x {} bricks along x and z, {} \
+             thread(s) each",
+            world.size(),
+            bricks.nx,
+            bricks.nz,
+            job.threads
+        );
+        let mut stepper = BrickRun {
+            brick: Brick::of(&job.sim, bricks, 0),
+            transport: &world,
+        };
+        drop(job);
+        return f(&mut stepper);
+    }
+    let _ = (case, packing, first_stage);
+    let mut sim = sim;
+    f(&mut sim)
+}
+
+/// A rank other than 0 under `mpirun`: steps its brick of every native run rank 0 hands out
+/// ([`step_native`]), through the same time loop, writing nothing, until told to end.
+#[cfg(feature = "mpi")]
+pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
+    use crate::solver::shear::decompose::{split_for, Brick, BrickRun, Transport};
+    while let Some(job) = crate::ranks::next_job(world) {
+        let bricks = split_for(world.size(), job.case.box_x, job.case.box_z);
+        let pool = match rayon::ThreadPoolBuilder::new()
+            .num_threads(job.threads.max(1))
+            .build()
+        {
+            Ok(pool) => pool,
+            Err(e) => {
+                // this rank cannot take part: end it, and mpirun ends the others
+                eprintln!("error: rank {}: no thread pool: {e}", world.rank());
+                std::process::exit(2);
+            }
+        };
+        pool.install(|| {
+            let world = crate::solver::shear::mpi::Mpi::world();
+            let mut stepper = BrickRun {
+                brick: Brick::of(&job.sim, bricks, world.rank()),
+                transport: &world,
+            };
+            let mut run = NativeLoop::new(Instant::now());
+            // rank 0 reports the run's outcome; an error is every rank's (agreed on)
+            let _ = drive(
+                &job.case,
+                &job.packing,
+                None,
+                &mut stepper,
+                job.first_stage,
+                &mut run,
+            );
+        });
+    }
+}
+
+/// What a native run collects as it goes (and its checkpoint holds).
+pub struct NativeLoop {
+    pub rows: Vec<Row>,
+    pub compacted: Option<Packing>,
+    pub profile: Vec<ProfileSample>,
+    /// Wall time of the run before this process resumed it [s], and when this one started.
+    pub wall_before: f64,
+    pub t0: Instant,
+}
+
+impl NativeLoop {
+    pub fn new(t0: Instant) -> Self {
+        NativeLoop {
+            rows: Vec::new(),
+            compacted: None,
+            profile: Vec::new(),
+            wall_before: 0.0,
+            t0,
+        }
+    }
+}
+
+/// Where a run's outputs go: the writing rank's (none on the other ranks of a decomposed
+/// run).
+pub struct Writes<'a> {
+    pub out: &'a Path,
+    pub progress: &'a Progress,
+    pub checkpointing: Checkpointing,
+    pub case_json: &'a str,
+}
+
+/// The time loop of a native run from `first_stage`, one process's or one brick's
+/// ([`Stepper`]): every stage's setup and steps, the rows, profile samples and compacted
+/// state collected in `run`, and with `writes` the snapshots, progress and checkpoints.
+/// Every brick of a decomposed run makes the same calls at the same steps (the whole state
+/// is gathered at output, sample and snapshot steps); an output that fails to be written
+/// stops every brick. Returns the final whole state.
+pub fn drive<S: Stepper + ?Sized>(
+    case: &ShearCase,
+    packing: &Packing,
+    writes: Option<&Writes>,
+    stepper: &mut S,
+    first_stage: usize,
+    run: &mut NativeLoop,
+) -> Result<ShearSim> {
+    let ends = case.run_ends();
+    let windows = schedule(case);
+    let rec = |sim: &ShearSim| Row::from(&sim.record());
+    let mut last_checkpoint = Instant::now();
+    if first_stage == 0 && stepper.steps() == 0 {
+        stepper.setup(0.0)?;
+        let w = stepper.whole();
+        run.rows.push(rec(&w));
+        // the initial state, as LIGGGHTS' dump writes it at its first run's setup
+        let written = match writes {
+            Some(o) if case.snapshot_every > 0 => {
+                vtk::write_snapshot(&o.out.join("vtk"), &w.snapshot(), case.dt)
+            }
+            _ => Ok(()),
+        };
+        drop(w);
+        all_written(stepper, written)?;
+    }
+    for (k, &end) in ends.iter().enumerate().skip(first_stage) {
+        // a stage starts with its setup; a run resumed inside the stage is past it
+        if k > 0 && stepper.steps() == ends[k - 1] {
+            stepper.setup(case.stages[k - 1].speed)?;
+        }
+        while stepper.steps() < end {
+            stepper.step()?;
+            let step = stepper.steps();
+            let output = is_output(case, step, &ends);
+            let sample = is_sample(&windows, step);
+            let snapshot = case.snapshot_every > 0 && step.is_multiple_of(case.snapshot_every);
+            if !(output || sample || snapshot) {
+                continue;
+            }
+            let w = stepper.whole();
+            if output {
+                w.check_finite()?;
+                let lost = w.lost_particles(packing.box_y_lo, packing.box_y_hi);
+                if lost > 0 {
+                    return Err(Error::Solver {
+                        step,
+                        msg: format!("{lost} particles left the box through a plate"),
+                    });
+                }
+                run.rows.push(rec(&w));
+            }
+            if sample {
+                run.profile.push(ProfileSample {
+                    step,
+                    top_y: w.record().top_y,
+                    y: w.x.iter().map(|x| x[1]).collect(),
+                    vx: w.v.iter().map(|v| v[0]).collect(),
+                });
+            }
+            let written = match writes {
+                None => Ok(()),
+                Some(o) => {
+                    if output {
+                        o.progress.set(step);
+                    }
+                    let checkpoint = match o.checkpointing {
+                        Checkpointing::Every(every) => {
+                            output && last_checkpoint.elapsed() >= every && step < end
+                        }
+                        Checkpointing::Off => false,
+                    };
+                    (|| -> Result<()> {
+                        if snapshot {
+                            vtk::write_snapshot(&o.out.join("vtk"), &w.snapshot(), case.dt)?;
+                        }
+                        if checkpoint {
+                            // the stage index is k here; a checkpoint at a stage's last step
+                            // would need the next stage's setup, so none is taken there
+                            write_checkpoint(o, k, run, &w)?;
+                            last_checkpoint = Instant::now();
+                        }
+                        Ok(())
+                    })()
+                }
+            };
+            drop(w);
+            all_written(stepper, written)?;
+        }
+        if k == 0 {
+            run.compacted = Some(stepper.whole().state(packing));
+        }
+    }
+    Ok(stepper.whole().into_owned())
+}
+
+/// `written`, agreed on by every brick: an error here, or on another brick.
+fn all_written<S: Stepper + ?Sized>(stepper: &mut S, written: Result<()>) -> Result<()> {
+    let ok = stepper.all_ok(written.is_ok());
+    written?;
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::Solver {
+            step: stepper.steps(),
+            msg: "another rank could not write its outputs".into(),
+        })
+    }
+}
+
+/// Writes the checkpoint of a run at stage `stage` with the whole state `sim`.
+fn write_checkpoint(o: &Writes, stage: usize, run: &NativeLoop, sim: &ShearSim) -> Result<()> {
+    let cp = NativeCheckpoint {
+        stage,
+        wall_time: run.wall_before + run.t0.elapsed().as_secs_f64(),
+        sim: sim.clone(),
+        rows: run.rows.clone(),
+        compacted: run.compacted.clone(),
+        profile: run.profile.clone(),
+    };
+    let bytes = rmp_serde::to_vec(&cp).map_err(|e| Error::Solver {
+        step: sim.step,
+        msg: format!("cannot encode the checkpoint: {e}"),
+    })?;
+    write_atomic(
+        &o.out.join(CHECKPOINT_NAME),
+        &crate::fsutil::seal(
+            CHECKPOINT_KIND,
+            CHECKPOINT_VERSION,
+            o.case_json.as_bytes(),
+            &bytes,
+        ),
+    )
 }
 
 /// LIGGGHTS' particle-steps per second on one core, about (`verify bench`, 2026-12-02:

@@ -285,7 +285,8 @@ fn layers_point_one_way_and_imports_have_no_circle() {
             "spec" | "packing.rs" => 2,
             "deck" => 3,
             "run" | "series.rs" | "compare.rs" | "calibration.rs" | "profile.rs"
-            | "liggghts.rs" | "chung_ooi.rs" | "shear.rs" | "vtk.rs" | "rotation_map.rs" => 4,
+            | "liggghts.rs" | "chung_ooi.rs" | "shear.rs" | "vtk.rs" | "rotation_map.rs"
+            | "ranks.rs" => 4,
             "report" => 5,
             "cli" | "lib.rs" | "main.rs" => 6,
             _ => panic!("{f}: no layer; add it to tests/architecture.rs"),

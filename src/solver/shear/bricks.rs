@@ -86,8 +86,14 @@ pub fn sum_in_id_order(shares: &[Vec<(u32, V3, V3)>]) -> (V3, V3) {
         all.windows(2).all(|w| w[0].0 < w[1].0),
         "a particle in two bricks' shares"
     );
+    sum_in_order(all.into_iter().map(|(_, b, t)| (*b, *t)))
+}
+
+/// The sums (bottom, top) of per-particle plate forces in the order given (one process's:
+/// increasing id), component by component as `ShearSim::plate_forces_over` adds them.
+pub fn sum_in_order(terms: impl Iterator<Item = (V3, V3)>) -> (V3, V3) {
     let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
-    for (_, b, t) in all {
+    for (b, t) in terms {
         for c in 0..3 {
             tb[c] += b[c];
             tt[c] += t[c];

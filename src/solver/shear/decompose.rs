@@ -38,7 +38,7 @@
 //! without a new one) and gives it back ([`Brick::gather`]), so a run checkpointed from
 //! one decomposition resumes on another to the same bits.
 
-use super::bricks::{sum_in_id_order, Bricks};
+use super::bricks::Bricks;
 use super::neighbor::{Carried, Members, NeighborList, Pair};
 use super::{PairState, ShearSim, WallSlots};
 use crate::error::{Error, Result};
@@ -60,6 +60,9 @@ pub trait Transport {
     /// All-to-all: `out[s]` is delivered to rank `s`; returns what each rank sent to this
     /// one, by sender (this rank's own `out[rank]` included).
     fn exchange<T: Wire>(&self, out: Vec<T>) -> Vec<T>;
+    /// [`Transport::exchange`] of numbers whose counts the receiver knows (`expect[r]` from
+    /// rank r): the per-step messages, sent as they are (one `MPI_Alltoallv`, no encoding).
+    fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>>;
 }
 
 /// Every rank's `mine`, by rank.
@@ -136,6 +139,13 @@ impl Transport for InProcess {
         self.board.barrier.wait();
         got
     }
+
+    fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>> {
+        let got = self.exchange(out);
+        let lengths: Vec<usize> = got.iter().map(Vec::len).collect();
+        assert_eq!(lengths, expect, "messages of the lengths expected");
+        got
+    }
 }
 
 /// A particle moving to another brick: everything it carries from step to step.
@@ -180,9 +190,43 @@ struct Whole {
 /// at the last force evaluation (what the records count).
 type GlobalPair = (Pair, ContactHistory, PairState);
 
-/// One brick's per-step share of the plate forces: its own particles with plate candidates
-/// `(id, bottom, top)`, and whether its force evaluation failed (and how).
-type PlateShare = (Option<String>, Vec<(u32, V3, V3)>);
+/// Who adds what to the plate forces between two rebuilds: every brick's own particles with
+/// plate candidates (fixed at a rebuild), so that each step sends their forces alone, in an
+/// order every brick knows, and every brick sums them in increasing id.
+#[derive(Clone, Debug, Default)]
+struct PlatePlan {
+    /// This brick's own particles with candidates (local indices, increasing id).
+    mine: Vec<u32>,
+    /// How many each rank sends.
+    counts: Vec<usize>,
+    /// Every such particle in increasing id: (rank, its place in that rank's list).
+    order: Vec<(u32, u32)>,
+}
+
+impl PlatePlan {
+    /// The plan from each rank's ids of own particles with candidates (increasing).
+    fn new(mine: Vec<u32>, ids_by_rank: &[Vec<u32>]) -> Self {
+        let mut order: Vec<(u32, u32, u32)> = ids_by_rank
+            .iter()
+            .enumerate()
+            .flat_map(|(r, ids)| {
+                ids.iter()
+                    .enumerate()
+                    .map(move |(k, &id)| (id, r as u32, k as u32))
+            })
+            .collect();
+        order.sort_unstable();
+        assert!(
+            order.windows(2).all(|w| w[0].0 < w[1].0),
+            "a particle owned by two bricks"
+        );
+        PlatePlan {
+            mine,
+            counts: ids_by_rank.iter().map(Vec::len).collect(),
+            order: order.into_iter().map(|(_, r, k)| (r, k)).collect(),
+        }
+    }
+}
 
 /// One brick of a decomposed shear simulation.
 pub struct Brick {
@@ -195,6 +239,8 @@ pub struct Brick {
     send: Vec<Vec<u32>>,
     /// Per rank, the local indices of the ghosts it owns, in the order it sends them.
     recv: Vec<Vec<u32>>,
+    /// The plate forces' plan, fixed from one rebuild to the next: see [`PlatePlan`].
+    plates: PlatePlan,
     /// Particles that arrived from other bricks at rebuilds (a statistic for tests).
     pub arrived: u64,
 }
@@ -285,6 +331,19 @@ impl Brick {
                 recv[bricks.owner(held[q])].push(l as u32);
             }
         }
+        // every brick's own particles with plate candidates, from the whole state
+        let with_candidates = |q: usize| global.wall_start[q] != global.wall_start[q + 1];
+        let mut ids_by_rank = vec![Vec::new(); bricks.count()];
+        for (q, p) in held.iter().enumerate() {
+            if with_candidates(q) {
+                ids_by_rank[bricks.owner(*p)].push(q as u32);
+            }
+        }
+        let mine = (0..n)
+            .filter(|&l| !sim.ghost[l] && sim.wall_start[l] != sim.wall_start[l + 1])
+            .map(|l| l as u32)
+            .collect();
+        let plates = PlatePlan::new(mine, &ids_by_rank);
         Brick {
             sim,
             bricks,
@@ -292,6 +351,7 @@ impl Brick {
             cut,
             send,
             recv,
+            plates,
             arrived: 0,
         }
     }
@@ -318,10 +378,9 @@ impl Brick {
     /// One time step ([`ShearSim::step`]) in every brick.
     pub fn step(&mut self, t: &impl Transport) -> Result<()> {
         let moved = self.sim.drift();
-        self.forward(t);
+        let moved = self.forward(t, moved);
         self.sim.move_plates();
         self.sim.lap(|p| &mut p.plates);
-        let moved = any(t, moved);
         if self.sim.decide_rebuild(moved) {
             self.rebuild(t)?;
         } else {
@@ -335,14 +394,16 @@ impl Brick {
     }
 
     /// The ghosts' positions and velocities from their owners (LAMMPS `forward_comm`), after
-    /// the drift: what the pair pass reads of them.
-    fn forward(&mut self, t: &impl Transport) {
+    /// the drift: what the pair pass reads of them; with them each brick's `moved` (the
+    /// skin/2 test of its own particles): true when any brick's is.
+    fn forward(&mut self, t: &impl Transport, moved: bool) -> bool {
         let s = &self.sim;
         let out: Vec<Vec<f64>> = self
             .send
             .iter()
             .map(|list| {
-                let mut buf = Vec::with_capacity(9 * list.len());
+                let mut buf = Vec::with_capacity(1 + 9 * list.len());
+                buf.push(f64::from(u8::from(moved)));
                 for &l in list {
                     let l = l as usize;
                     buf.extend_from_slice(&s.x[l]);
@@ -352,11 +413,13 @@ impl Brick {
                 buf
             })
             .collect();
-        let got = t.exchange(out);
+        let expect: Vec<usize> = self.recv.iter().map(|l| 1 + 9 * l.len()).collect();
+        let got = t.exchange_f64(out, &expect);
         let s = &mut self.sim;
+        let mut any = false;
         for (list, buf) in self.recv.iter().zip(&got) {
-            assert_eq!(buf.len(), 9 * list.len(), "ghost message of another length");
-            for (&l, rec) in list.iter().zip(buf.chunks_exact(9)) {
+            any |= buf[0] != 0.0;
+            for (&l, rec) in list.iter().zip(buf[1..].chunks_exact(9)) {
                 let l = l as usize;
                 s.x[l] = [rec[0], rec[1], rec[2]];
                 s.v[l] = [rec[3], rec[4], rec[5]];
@@ -366,28 +429,35 @@ impl Brick {
                 }
             }
         }
+        any
     }
 
-    /// The plate forces of this evaluation, summed over every brick's own particles in
-    /// increasing id (one process's order and bits), kept as the plates' forces; `local`
-    /// is this brick's force evaluation (true when it kicked). An error anywhere is an error
-    /// everywhere.
+    /// The plate forces of this evaluation, summed over every brick's own particles with
+    /// plate candidates in increasing id (one process's order and bits), kept as the plates'
+    /// forces; `local` is this brick's force evaluation (true when it kicked). An error
+    /// anywhere is an error everywhere.
     fn plate_forces(&mut self, t: &impl Transport, local: Result<bool>) -> Result<bool> {
         let s = &self.sim;
-        let share: Vec<(u32, V3, V3)> = (0..s.x.len())
-            .filter(|&q| s.wall_start[q] != s.wall_start[q + 1])
-            .map(|q| (s.ids[q], s.wall_force[q].0, s.wall_force[q].1))
-            .collect();
-        let (failed, kicked) = match &local {
-            Ok(k) => (None, *k),
-            Err(e) => (Some(e.to_string()), false),
-        };
-        let all: Vec<PlateShare> = all_gather(t, (failed, share));
-        agree(local, all.iter().map(|(e, _)| e.clone()), self.sim.step)?;
-        let shares: Vec<Vec<(u32, V3, V3)>> = all.into_iter().map(|(_, s)| s).collect();
-        let (tb, tt) = sum_in_id_order(&shares);
+        let mut share = Vec::with_capacity(1 + 6 * self.plates.mine.len());
+        share.push(f64::from(u8::from(local.is_err())));
+        for &q in &self.plates.mine {
+            let (b, tp) = s.wall_force[q as usize];
+            share.extend_from_slice(&b);
+            share.extend_from_slice(&tp);
+        }
+        let expect: Vec<usize> = self.plates.counts.iter().map(|c| 1 + 6 * c).collect();
+        let got = t.exchange_f64(vec![share; t.size()], &expect);
+        if got.iter().any(|g| g[0] != 0.0) {
+            // rare: say why, every brick
+            let said = all_gather(t, local.as_ref().err().map(|e| e.to_string()));
+            return agree(local, said, self.sim.step);
+        }
+        let (tb, tt) = super::bricks::sum_in_order(self.plates.order.iter().map(|&(r, k)| {
+            let f = &got[r as usize][1 + 6 * k as usize..][..6];
+            ([f[0], f[1], f[2]], [f[3], f[4], f[5]])
+        }));
         self.sim.keep_plate_forces(tb, tt)?;
-        Ok(kicked)
+        local
     }
 
     /// A neighbour rebuild of every brick ([`ShearSim::rebuild`]): the divergence check,
@@ -413,6 +483,12 @@ impl Brick {
         };
         s.nl.build_over(&team, &s.x, &s.radius, s.skin, s.box_, over, carried);
         s.after_list(&team);
+        let mine: Vec<u32> = (0..s.x.len())
+            .filter(|&l| !s.ghost[l] && s.wall_start[l] != s.wall_start[l + 1])
+            .map(|l| l as u32)
+            .collect();
+        let ids: Vec<u32> = mine.iter().map(|&l| s.ids[l as usize]).collect();
+        self.plates = PlatePlan::new(mine, &all_gather(t, ids));
         Ok(())
     }
 
@@ -675,6 +751,87 @@ impl Brick {
         g.size_pair_buffers();
         g
     }
+}
+
+/// How a run steps its state: one process ([`ShearSim`]) or one brick of a decomposition
+/// ([`BrickRun`]), so that a run's loop (outputs, samples, snapshots, checkpoints) is written
+/// once. Every brick of a decomposition calls the same methods at the same steps.
+pub trait Stepper {
+    /// A run's setup ([`ShearSim::setup`]).
+    fn setup(&mut self, bottom_speed: f64) -> Result<()>;
+    /// One time step.
+    fn step(&mut self) -> Result<()>;
+    /// The steps made so far.
+    fn steps(&self) -> u64;
+    /// The whole state (collective for bricks: every brick gathers it).
+    fn whole(&mut self) -> std::borrow::Cow<'_, ShearSim>;
+    /// Whether every brick's `ok` is true (collective for bricks): what stops all the bricks
+    /// of a run when one of them fails outside a step (writing an output).
+    fn all_ok(&mut self, ok: bool) -> bool;
+}
+
+impl Stepper for ShearSim {
+    fn setup(&mut self, bottom_speed: f64) -> Result<()> {
+        ShearSim::setup(self, bottom_speed)
+    }
+
+    fn step(&mut self) -> Result<()> {
+        ShearSim::step(self)
+    }
+
+    fn steps(&self) -> u64 {
+        self.step
+    }
+
+    fn whole(&mut self) -> std::borrow::Cow<'_, ShearSim> {
+        std::borrow::Cow::Borrowed(self)
+    }
+
+    fn all_ok(&mut self, ok: bool) -> bool {
+        ok
+    }
+}
+
+/// One brick stepping with its transport.
+pub struct BrickRun<'t, T: Transport> {
+    pub brick: Brick,
+    pub transport: &'t T,
+}
+
+impl<T: Transport> Stepper for BrickRun<'_, T> {
+    fn setup(&mut self, bottom_speed: f64) -> Result<()> {
+        self.brick.setup(self.transport, bottom_speed)
+    }
+
+    fn step(&mut self) -> Result<()> {
+        self.brick.step(self.transport)
+    }
+
+    fn steps(&self) -> u64 {
+        self.brick.sim.step
+    }
+
+    fn whole(&mut self) -> std::borrow::Cow<'_, ShearSim> {
+        std::borrow::Cow::Owned(self.brick.gather(self.transport))
+    }
+
+    fn all_ok(&mut self, ok: bool) -> bool {
+        !any(self.transport, !ok)
+    }
+}
+
+/// The split of a box `lx` x `lz` into `ranks` bricks with the least boundary between them
+/// (`nx lz + nz lx`, which the ghosts' count follows), nx x nz = ranks.
+pub fn split_for(ranks: usize, lx: f64, lz: f64) -> Bricks {
+    let (nx, nz) = (1..=ranks)
+        .filter(|nx| ranks.is_multiple_of(*nx))
+        .map(|nx| (nx, ranks / nx))
+        .min_by(|a, b| {
+            let cost = |(nx, nz): (usize, usize)| nx as f64 * lz + nz as f64 * lx;
+            cost(*a).total_cmp(&cost(*b))
+        })
+        .unwrap_or((1, 1));
+    Bricks { nx, nz, lx, lz }
 }
 
 /// Every brick's word on one collective step: Ok when no brick failed; else this brick's own

@@ -13,6 +13,8 @@
 pub mod bricks;
 pub mod decompose;
 mod implicit;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod neighbor;
 mod observe;
 pub mod pairs;

@@ -1,0 +1,112 @@
+//! The MPI transport of a decomposed run (issue #39, the `mpi` feature): the bricks'
+//! [`Transport`] over a communicator of rsmpi (the `mpi` crate, over the system's MPI).
+//! An exchange is one `MPI_Alltoall` of the message sizes and one `MPI_Alltoallv` of the
+//! messages, each encoded as MessagePack (every f64 as its 64 bits: the bricks' bits travel
+//! unchanged).
+
+use super::decompose::{Transport, Wire};
+use mpi::datatype::{Partition, PartitionMut};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+/// A communicator's ranks as bricks.
+pub struct Mpi {
+    world: SimpleCommunicator,
+}
+
+impl Mpi {
+    pub fn new(world: SimpleCommunicator) -> Self {
+        Mpi { world }
+    }
+
+    /// `MPI_COMM_WORLD` (MPI initialised): a handle per thread that calls MPI (a
+    /// communicator handle is not shared between threads; the calls are serialised).
+    pub fn world() -> Self {
+        Mpi {
+            world: SimpleCommunicator::world(),
+        }
+    }
+}
+
+/// Offsets of consecutive blocks of sizes `counts`.
+fn offsets(counts: &[i32]) -> Vec<i32> {
+    counts
+        .iter()
+        .scan(0i32, |at, &c| {
+            let o = *at;
+            *at += c;
+            Some(o)
+        })
+        .collect()
+}
+
+/// One `MPI_Alltoallv` of `send` (blocks of `counts`) into blocks of `got_counts`.
+fn all_to_all<T: Equivalence + Default + Clone>(
+    world: &SimpleCommunicator,
+    send: &[T],
+    counts: &[i32],
+    got_counts: &[i32],
+) -> Vec<T> {
+    let (sent_at, got_at) = (offsets(counts), offsets(got_counts));
+    let mut got = vec![T::default(); got_counts.iter().map(|&c| c as usize).sum()];
+    {
+        let s = Partition::new(send, counts, &sent_at[..]);
+        let mut r = PartitionMut::new(&mut got[..], got_counts, &got_at[..]);
+        world.all_to_all_varcount_into(&s, &mut r);
+    }
+    got
+}
+
+/// Message lengths as MPI counts (a message over 2^31 items is a bug of the caller).
+fn counts(lengths: impl Iterator<Item = usize>) -> Vec<i32> {
+    lengths
+        .map(|n| i32::try_from(n).expect("a brick's message under 2^31 items"))
+        .collect()
+}
+
+impl Transport for Mpi {
+    fn rank(&self) -> usize {
+        self.world.rank() as usize
+    }
+
+    fn size(&self) -> usize {
+        self.world.size() as usize
+    }
+
+    fn exchange<T: Wire>(&self, out: Vec<T>) -> Vec<T> {
+        let size = self.size();
+        assert_eq!(out.len(), size, "one message per rank");
+        // an encoding failure or a message over 2 GiB is a bug of the caller, not an input
+        let bufs: Vec<Vec<u8>> = out
+            .iter()
+            .map(|m| rmp_serde::to_vec(m).expect("a brick's message encodes"))
+            .collect();
+        let sent = counts(bufs.iter().map(Vec::len));
+        let mut got_counts = vec![0i32; size];
+        self.world.all_to_all_into(&sent[..], &mut got_counts[..]);
+        let got = all_to_all(&self.world, &bufs.concat(), &sent, &got_counts);
+        let got_at = offsets(&got_counts);
+        (0..size)
+            .map(|k| {
+                let at = got_at[k] as usize;
+                let bytes = &got[at..at + got_counts[k] as usize];
+                rmp_serde::from_slice(bytes).expect("a brick's message decodes")
+            })
+            .collect()
+    }
+
+    fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>> {
+        assert_eq!(out.len(), self.size(), "one message per rank");
+        let sent = counts(out.iter().map(Vec::len));
+        let got_counts = counts(expect.iter().copied());
+        let got = all_to_all(&self.world, &out.concat(), &sent, &got_counts);
+        let mut at = 0;
+        expect
+            .iter()
+            .map(|&n| {
+                at += n;
+                got[at - n..at].to_vec()
+            })
+            .collect()
+    }
+}

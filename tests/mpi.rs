@@ -1,0 +1,164 @@
+//! One simulation over MPI ranks (issue #39): `mpirun -np N verify shear --native-only`
+//! writes one process's outputs byte for byte (rows, velocity profiles, ParaView snapshots,
+//! the rotation map) for 2 and 3 ranks, and a run killed on 2 ranks resumes on 3 from its
+//! checkpoint to the uninterrupted run's bytes. Built with the `mpi` feature (CI runs
+//! `cargo test --release --features mpi --test mpi`, with OpenMPI's `mpirun`).
+#![cfg(feature = "mpi")]
+
+mod common;
+
+use common::{text, verify, verify_bin};
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// `mpirun` with `np` ranks of `verify args` (more ranks than cores allowed: correctness,
+/// not speed; as root too, as CI machines run).
+fn mpirun(np: usize) -> Command {
+    let mut c = Command::new("mpirun");
+    c.args(["--oversubscribe", "--allow-run-as-root", "-np"])
+        .arg(np.to_string())
+        .arg(verify_bin());
+    c
+}
+
+/// The ci shear of one seed to strain 0.1, native only, mu_r 0.5, eta_r 0.5, on 1 thread
+/// per rank, into `out`.
+fn case(out: &Path) -> Vec<String> {
+    [
+        "shear",
+        "--preset",
+        "ci",
+        "--seeds",
+        "1",
+        "--native-only",
+        "--mu-r",
+        "0.5",
+        "--eta-r",
+        "0.5",
+        "--strain",
+        "0.1",
+        "--threads",
+        "1",
+        "--snapshot-every",
+        "2000",
+        "--out",
+        out.to_str().expect("a UTF-8 path"),
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+fn ran(o: &Output, what: &str) {
+    assert!(o.status.success(), "{what}: {}", text(o));
+}
+
+/// Every output file of seed 1 that a run's bits decide (not native_run.json: wall time).
+fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let seed = dir.join("seed1");
+    let mut files: Vec<(String, Vec<u8>)> = [
+        "native.csv",
+        "native_profile.csv",
+        "native_profile.json",
+        "rotation_map.svg",
+    ]
+    .iter()
+    .map(|f| (f.to_string(), std::fs::read(seed.join(f)).expect(f)))
+    .collect();
+    let mut vtk: Vec<_> = std::fs::read_dir(seed.join("vtk"))
+        .expect("snapshots")
+        .map(|e| e.unwrap().path())
+        .collect();
+    vtk.sort();
+    assert!(vtk.len() >= 3, "snapshots: {vtk:?}");
+    for p in vtk {
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        files.push((name, std::fs::read(&p).unwrap()));
+    }
+    assert!(files.iter().all(|(_, b)| !b.is_empty()));
+    files
+}
+
+fn same_outputs(a: &Path, b: &Path, what: &str) {
+    let (x, y) = (outputs(a), outputs(b));
+    assert_eq!(x.len(), y.len(), "{what}: file count");
+    for ((n, p), (m, q)) in x.iter().zip(&y) {
+        assert_eq!(n, m);
+        assert!(p == q, "{what}: {n} differs from one process's");
+    }
+}
+
+#[test]
+fn two_and_three_ranks_write_one_process_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one");
+    let args = case(&one);
+    ran(
+        &verify(&args.iter().map(String::as_str).collect::<Vec<_>>()),
+        "one process",
+    );
+    for np in [2, 3] {
+        let out = dir.path().join(format!("np{np}"));
+        let o = mpirun(np).args(case(&out)).output().unwrap();
+        ran(&o, &format!("{np} ranks"));
+        let t = text(&o);
+        assert!(
+            t.contains(&format!("decomposed over {np} MPI ranks")),
+            "{np} ranks: not decomposed: {t}"
+        );
+        same_outputs(&one, &out, &format!("{np} ranks"));
+        eprintln!("{np} ranks: every output byte for byte one process's");
+    }
+}
+
+#[test]
+fn a_run_killed_on_two_ranks_resumes_on_three_to_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let one = dir.path().join("one");
+    let cut = dir.path().join("cut");
+    let with_checkpoints = |out: &Path| {
+        let mut a = case(out);
+        a.extend(["--checkpoint-every", "0"].map(String::from));
+        a
+    };
+    ran(
+        &verify(
+            &with_checkpoints(&one)
+                .iter()
+                .map(String::as_str)
+                .collect::<Vec<_>>(),
+        ),
+        "one process",
+    );
+    // 2 ranks, stopped (SIGTERM to mpirun, which ends its ranks) once a checkpoint exists
+    let mut child = mpirun(2)
+        .args(with_checkpoints(&cut))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let cp = cut.join("seed1/native_checkpoint.bin");
+    let t0 = Instant::now();
+    while !cp.exists() {
+        assert!(t0.elapsed().as_secs() < 300, "no checkpoint written");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    // SAFETY: a signal to our own child's pid
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGTERM);
+    }
+    child.wait().unwrap();
+    assert!(
+        !cut.join("seed1/native.csv").exists(),
+        "the run ended before it was stopped: the test stopped nothing"
+    );
+    let o = mpirun(3).args(with_checkpoints(&cut)).output().unwrap();
+    ran(&o, "resumed on 3 ranks");
+    let t = text(&o);
+    assert!(
+        t.contains("resumed from checkpoint at step") && t.contains("over 3 MPI ranks"),
+        "{t}"
+    );
+    same_outputs(&one, &cut, "killed on 2 ranks, resumed on 3");
+}
