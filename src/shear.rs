@@ -428,8 +428,9 @@ pub struct Writes<'a> {
 /// ([`Stepper`]): every stage's setup and steps, the rows, profile samples and compacted
 /// state collected in `run`, and with `writes` the snapshots, progress and checkpoints.
 /// Every brick of a decomposed run makes the same calls at the same steps (the whole state
-/// is gathered at output, sample and snapshot steps); an output that fails to be written
-/// stops every brick. Returns the final whole state.
+/// is gathered on rank 0 at output, sample and snapshot steps, where the checks and writes
+/// are made); a check or a write that fails there stops every brick. Returns the final
+/// whole state (an error on the ranks other than 0, which hold none).
 pub fn drive<S: Stepper + ?Sized>(
     case: &ShearCase,
     packing: &Packing,
@@ -444,17 +445,20 @@ pub fn drive<S: Stepper + ?Sized>(
     let mut last_checkpoint = Instant::now();
     if first_stage == 0 && stepper.steps() == 0 {
         stepper.setup(0.0)?;
-        let w = stepper.whole();
-        run.rows.push(rec(&w));
-        // the initial state, as LIGGGHTS' dump writes it at its first run's setup
-        let written = match writes {
-            Some(o) if case.snapshot_every > 0 => {
-                vtk::write_snapshot(&o.out.join("vtk"), &w.snapshot(), case.dt)
+        let done = match stepper.whole() {
+            None => Ok(()),
+            Some(w) => {
+                run.rows.push(rec(&w));
+                // the initial state, as LIGGGHTS' dump writes it at its first run's setup
+                match writes {
+                    Some(o) if case.snapshot_every > 0 => {
+                        vtk::write_snapshot(&o.out.join("vtk"), &w.snapshot(), case.dt)
+                    }
+                    _ => Ok(()),
+                }
             }
-            _ => Ok(()),
         };
-        drop(w);
-        all_written(stepper, written)?;
+        all_done(stepper, done)?;
     }
     for (k, &end) in ends.iter().enumerate().skip(first_stage) {
         // a stage starts with its setup; a run resumed inside the stage is past it
@@ -470,72 +474,78 @@ pub fn drive<S: Stepper + ?Sized>(
             if !(output || sample || snapshot) {
                 continue;
             }
-            let w = stepper.whole();
-            if output {
-                w.check_finite()?;
-                let lost = w.lost_particles(packing.box_y_lo, packing.box_y_hi);
-                if lost > 0 {
-                    return Err(Error::Solver {
+            let Some(w) = stepper.whole() else {
+                all_done(stepper, Ok(()))?;
+                continue;
+            };
+            let done = (|| -> Result<()> {
+                if output {
+                    w.check_finite()?;
+                    let lost = w.lost_particles(packing.box_y_lo, packing.box_y_hi);
+                    if lost > 0 {
+                        return Err(Error::Solver {
+                            step,
+                            msg: format!("{lost} particles left the box through a plate"),
+                        });
+                    }
+                    run.rows.push(rec(&w));
+                }
+                if sample {
+                    run.profile.push(ProfileSample {
                         step,
-                        msg: format!("{lost} particles left the box through a plate"),
+                        top_y: w.record().top_y,
+                        y: w.x.iter().map(|x| x[1]).collect(),
+                        vx: w.v.iter().map(|v| v[0]).collect(),
                     });
                 }
-                run.rows.push(rec(&w));
-            }
-            if sample {
-                run.profile.push(ProfileSample {
-                    step,
-                    top_y: w.record().top_y,
-                    y: w.x.iter().map(|x| x[1]).collect(),
-                    vx: w.v.iter().map(|v| v[0]).collect(),
-                });
-            }
-            let written = match writes {
-                None => Ok(()),
-                Some(o) => {
-                    if output {
-                        o.progress.set(step);
-                    }
-                    let checkpoint = match o.checkpointing {
-                        Checkpointing::Every(every) => {
-                            output && last_checkpoint.elapsed() >= every && step < end
-                        }
-                        Checkpointing::Off => false,
-                    };
-                    (|| -> Result<()> {
-                        if snapshot {
-                            vtk::write_snapshot(&o.out.join("vtk"), &w.snapshot(), case.dt)?;
-                        }
-                        if checkpoint {
-                            // the stage index is k here; a checkpoint at a stage's last step
-                            // would need the next stage's setup, so none is taken there
-                            write_checkpoint(o, k, run, &w)?;
-                            last_checkpoint = Instant::now();
-                        }
-                        Ok(())
-                    })()
+                let Some(o) = writes else {
+                    return Ok(());
+                };
+                if output {
+                    o.progress.set(step);
                 }
-            };
+                if snapshot {
+                    vtk::write_snapshot(&o.out.join("vtk"), &w.snapshot(), case.dt)?;
+                }
+                let checkpoint = match o.checkpointing {
+                    Checkpointing::Every(every) => {
+                        output && last_checkpoint.elapsed() >= every && step < end
+                    }
+                    Checkpointing::Off => false,
+                };
+                if checkpoint {
+                    // the stage index is k here; a checkpoint at a stage's last step would
+                    // need the next stage's setup, so none is taken there
+                    write_checkpoint(o, k, run, &w)?;
+                    last_checkpoint = Instant::now();
+                }
+                Ok(())
+            })();
             drop(w);
-            all_written(stepper, written)?;
+            all_done(stepper, done)?;
         }
         if k == 0 {
-            run.compacted = Some(stepper.whole().state(packing));
+            run.compacted = stepper.whole().map(|w| w.state(packing));
         }
     }
-    Ok(stepper.whole().into_owned())
+    let last = stepper.whole().map(|w| w.into_owned());
+    last.ok_or_else(|| Error::Solver {
+        step: stepper.steps(),
+        msg: "this rank holds no whole state (rank 0 does)".into(),
+    })
 }
 
-/// `written`, agreed on by every brick: an error here, or on another brick.
-fn all_written<S: Stepper + ?Sized>(stepper: &mut S, written: Result<()>) -> Result<()> {
-    let ok = stepper.all_ok(written.is_ok());
-    written?;
+/// `done` (an output step's checks and writes, made where the whole state is), agreed on by
+/// every brick: an error here, or on another brick.
+fn all_done<S: Stepper + ?Sized>(stepper: &mut S, done: Result<()>) -> Result<()> {
+    let ok = stepper.all_ok(done.is_ok());
+    done?;
     if ok {
         Ok(())
     } else {
         Err(Error::Solver {
             step: stepper.steps(),
-            msg: "another rank could not write its outputs".into(),
+            msg: "the run stopped on another rank".into(),
         })
     }
 }
