@@ -97,6 +97,27 @@ fn contact_rolling_plastic_agrees_and_writes_outputs() {
     }
 }
 
+/// A build without the `mpi` feature started as one of several MPI ranks would run the
+/// whole command once per rank: it refuses, naming the feature (issue #39).
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_build_without_mpi_refuses_to_run_as_several_ranks() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = std::process::Command::new(common::verify_bin())
+        .args(["shear", "--preset", "ci", "--native-only", "--out"])
+        .arg(dir.path().join("out"))
+        .env("OMPI_COMM_WORLD_SIZE", "2")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("one of 2 MPI ranks") && e.contains("--features mpi"),
+        "{e}"
+    );
+    assert!(!dir.path().join("out").exists(), "it ran anyway");
+}
+
 #[test]
 fn reference_mode_needs_no_liggghts() {
     let dir = tempfile::tempdir().unwrap();

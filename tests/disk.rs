@@ -23,12 +23,7 @@ fn killed_after_checkpoint(out: &Path) {
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    let cp = out.join("seed1/native_checkpoint.bin");
-    let t0 = Instant::now();
-    while !cp.exists() {
-        assert!(t0.elapsed().as_secs() < 120, "no checkpoint written");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    common::wait_for(&out.join("seed1/native_checkpoint.bin"), 120);
     std::thread::sleep(Duration::from_millis(300));
     child.kill().unwrap();
     child.wait().unwrap();

@@ -10,7 +10,7 @@ mod common;
 use common::{text, verify, verify_bin};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// `mpirun` with `np` ranks of `verify args` (more ranks than cores allowed: correctness,
 /// not speed; as root too, as CI machines run).
@@ -23,30 +23,21 @@ fn mpirun(np: usize) -> Command {
 }
 
 /// The ci shear of one seed to strain 0.1, native only, mu_r 0.5, eta_r 0.5, on 1 thread
-/// per rank, into `out`.
+/// per rank, a checkpoint at every output step, into `out`.
 fn case(out: &Path) -> Vec<String> {
-    [
-        "shear",
-        "--preset",
-        "ci",
-        "--seeds",
-        "1",
-        "--native-only",
+    let mut a = common::native_ci_checkpointed(out, "1");
+    let more = [
         "--mu-r",
         "0.5",
         "--eta-r",
         "0.5",
         "--strain",
         "0.1",
-        "--threads",
-        "1",
         "--snapshot-every",
         "2000",
-        "--out",
-        out.to_str().expect("a UTF-8 path"),
-    ]
-    .map(String::from)
-    .to_vec()
+    ];
+    a.extend(more.map(String::from));
+    a
 }
 
 fn ran(o: &Output, what: &str) {
@@ -63,7 +54,11 @@ fn outputs(dir: &Path) -> Vec<(String, Vec<u8>)> {
         "rotation_map.svg",
     ]
     .iter()
-    .map(|f| (f.to_string(), std::fs::read(seed.join(f)).expect(f)))
+    .map(|f| {
+        let p = seed.join(f);
+        let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        (f.to_string(), bytes)
+    })
     .collect();
     let mut vtk: Vec<_> = std::fs::read_dir(seed.join("vtk"))
         .expect("snapshots")
@@ -116,33 +111,18 @@ fn a_run_killed_on_two_ranks_resumes_on_three_to_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let one = dir.path().join("one");
     let cut = dir.path().join("cut");
-    let with_checkpoints = |out: &Path| {
-        let mut a = case(out);
-        a.extend(["--checkpoint-every", "0"].map(String::from));
-        a
-    };
     ran(
-        &verify(
-            &with_checkpoints(&one)
-                .iter()
-                .map(String::as_str)
-                .collect::<Vec<_>>(),
-        ),
+        &verify(&case(&one).iter().map(String::as_str).collect::<Vec<_>>()),
         "one process",
     );
     // 2 ranks, stopped (SIGTERM to mpirun, which ends its ranks) once a checkpoint exists
     let mut child = mpirun(2)
-        .args(with_checkpoints(&cut))
+        .args(case(&cut))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
-    let cp = cut.join("seed1/native_checkpoint.bin");
-    let t0 = Instant::now();
-    while !cp.exists() {
-        assert!(t0.elapsed().as_secs() < 300, "no checkpoint written");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    common::wait_for(&cut.join("seed1/native_checkpoint.bin"), 300);
     std::thread::sleep(Duration::from_millis(500));
     // SAFETY: a signal to our own child's pid
     unsafe {
@@ -153,7 +133,7 @@ fn a_run_killed_on_two_ranks_resumes_on_three_to_the_same_bytes() {
         !cut.join("seed1/native.csv").exists(),
         "the run ended before it was stopped: the test stopped nothing"
     );
-    let o = mpirun(3).args(with_checkpoints(&cut)).output().unwrap();
+    let o = mpirun(3).args(case(&cut)).output().unwrap();
     ran(&o, "resumed on 3 ranks");
     let t = text(&o);
     assert!(

@@ -196,3 +196,16 @@ pub fn screenshot(
         png.len()
     );
 }
+
+/// Waits until `path` exists (a run's checkpoint), at most `secs` seconds (then fails).
+pub fn wait_for(path: &std::path::Path, secs: u64) {
+    let t0 = std::time::Instant::now();
+    while !path.exists() {
+        assert!(
+            t0.elapsed().as_secs() < secs,
+            "{} not written",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}

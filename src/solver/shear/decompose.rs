@@ -163,6 +163,24 @@ struct Migrant {
     wall: WallSlots,
 }
 
+impl Migrant {
+    /// Local particle `q` of `s` with its plate contact records `wall`.
+    fn of(s: &ShearSim, q: usize, wall: WallSlots) -> Self {
+        Migrant {
+            id: s.ids[q],
+            x: s.x[q],
+            v: s.v[q],
+            omega: s.omega[q],
+            f: s.f[q],
+            torque: s.torque[q],
+            rotation: s.rotation[q],
+            radius: s.radius[q],
+            mass: s.mass[q],
+            wall,
+        }
+    }
+}
+
 /// What one brick sends another at a rebuild: the particles moving there and the histories
 /// of their pairs (global ids).
 type Leaving = (Vec<Migrant>, Vec<((u32, u32), ContactHistory)>);
@@ -506,18 +524,8 @@ impl Brick {
             if s.ghost[q] {
                 continue;
             }
-            let m = Migrant {
-                id: s.ids[q],
-                x: s.x[q],
-                v: s.v[q],
-                omega: s.omega[q],
-                f: s.f[q],
-                torque: s.torque[q],
-                rotation: s.rotation[q],
-                radius: s.radius[q],
-                mass: s.mass[q],
-                wall: std::mem::take(&mut s.wall[q]),
-            };
+            let wall = std::mem::take(&mut s.wall[q]);
+            let m = Migrant::of(s, q, wall);
             let to = self.bricks.owner(m.x);
             if to == self.me {
                 mine.push(m);
@@ -664,18 +672,7 @@ impl Brick {
         let wholes: Vec<Whole> = own
             .iter()
             .map(|&q| Whole {
-                p: Migrant {
-                    id: s.ids[q],
-                    x: s.x[q],
-                    v: s.v[q],
-                    omega: s.omega[q],
-                    f: s.f[q],
-                    torque: s.torque[q],
-                    rotation: s.rotation[q],
-                    radius: s.radius[q],
-                    mass: s.mass[q],
-                    wall: s.wall[q].clone(),
-                },
+                p: Migrant::of(s, q, s.wall[q].clone()),
                 xhold: s.xhold[q],
                 cand: s.wall_cand[s.wall_start[q] as usize..s.wall_start[q + 1] as usize].to_vec(),
             })
@@ -1000,6 +997,20 @@ mod tests {
         assert!(ends[1..].iter().all(|(w, _)| w.is_none()));
         let (one, moved) = ends.into_iter().next().unwrap();
         (one.expect("rank 0 gathers"), moved)
+    }
+
+    /// Bricks split the longer side first: the least boundary between them.
+    #[test]
+    fn the_split_has_the_least_boundary() {
+        let split = |n| {
+            let b = split_for(n, 4.0, 2.4);
+            (b.nx, b.nz)
+        };
+        assert_eq!(
+            [1, 2, 3, 4, 6, 7].map(split),
+            [(1, 1), (2, 1), (3, 1), (2, 2), (3, 2), (7, 1)]
+        );
+        assert_eq!(split_for(4, 2.0, 8.0).nz, 4);
     }
 
     fn dense() -> (ShearCase, Packing) {
