@@ -357,11 +357,7 @@ impl Brick {
                 ids_by_rank[bricks.owner(*p)].push(q as u32);
             }
         }
-        let mine = (0..n)
-            .filter(|&l| !sim.ghost[l] && sim.wall_start[l] != sim.wall_start[l + 1])
-            .map(|l| l as u32)
-            .collect();
-        let plates = PlatePlan::new(mine, &ids_by_rank);
+        let plates = PlatePlan::new(own_with_candidates(&sim), &ids_by_rank);
         Brick {
             sim,
             bricks,
@@ -372,16 +368,6 @@ impl Brick {
             plates,
             arrived: 0,
         }
-    }
-
-    /// This brick's simulation (its own particles and ghosts).
-    pub fn sim(&self) -> &ShearSim {
-        &self.sim
-    }
-
-    /// How many particles this brick owns.
-    pub fn owned(&self) -> usize {
-        self.sim.ghost.iter().filter(|g| !**g).count()
     }
 
     /// A run's setup ([`ShearSim::setup`]) in every brick: the stage speed, a rebuild, and
@@ -501,10 +487,7 @@ impl Brick {
         };
         s.nl.build_over(&team, &s.x, &s.radius, s.skin, s.box_, over, carried);
         s.after_list(&team);
-        let mine: Vec<u32> = (0..s.x.len())
-            .filter(|&l| !s.ghost[l] && s.wall_start[l] != s.wall_start[l + 1])
-            .map(|l| l as u32)
-            .collect();
+        let mine = own_with_candidates(s);
         let ids: Vec<u32> = mine.iter().map(|&l| s.ids[l as usize]).collect();
         self.plates = PlatePlan::new(mine, &all_gather(t, ids));
         Ok(())
@@ -851,6 +834,15 @@ pub fn split_for(ranks: usize, lx: f64, lz: f64) -> Bricks {
         })
         .unwrap_or((1, 1));
     Bricks { nx, nz, lx, lz }
+}
+
+/// A brick's own particles with plate candidates (local indices, increasing id): its share
+/// of the plate forces until the next rebuild.
+fn own_with_candidates(s: &ShearSim) -> Vec<u32> {
+    (0..s.x.len())
+        .filter(|&l| !s.ghost[l] && s.wall_start[l] != s.wall_start[l + 1])
+        .map(|l| l as u32)
+        .collect()
 }
 
 /// Every brick's word on one collective step: Ok when no brick failed; else this brick's own
