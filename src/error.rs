@@ -78,6 +78,9 @@ pub enum Error {
     /// A run of several cases in which some could not be run (each named in the message).
     #[error("{0}")]
     Cases(String),
+    /// A run over MPI ranks that failed (the launcher, or a rank), with its log's tail.
+    #[error("{0}")]
+    Ranks(String),
     #[error("JSON error: {0}")]
     Json(#[from] serde_json::Error),
 }

@@ -50,7 +50,29 @@ pub fn start() -> Start {
 }
 
 #[cfg(feature = "mpi")]
-pub use mpi_ranks::{finish, hand_out, next_job, world, Job};
+pub use mpi_ranks::{finish, hand_out, next_work, world, Job, Work};
+
+/// The ranks a native run of this process is decomposed over: the world's size under
+/// `mpirun` (the `mpi` feature), else 1.
+pub fn native_ranks() -> usize {
+    #[cfg(feature = "mpi")]
+    if let Some(w) = world() {
+        use crate::solver::shear::decompose::Transport;
+        return w.size();
+    }
+    1
+}
+
+/// A bench's run of a stepper (`shear::timed_steps`): one servo step at rest, `warm` steps
+/// at `speed`, then `timed` steps at `speed`, timed.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Timing {
+    pub warm: u64,
+    pub timed: u64,
+    pub speed: f64,
+    /// The pair pass's kernel path (every rank's).
+    pub kernel: crate::solver::shear::KernelPath,
+}
 
 /// Rank 0's hold on the other ranks: when dropped (the command ended), they are told to end.
 pub struct Lead(());
@@ -74,6 +96,17 @@ mod mpi_ranks {
         pub first_stage: usize,
         /// Threads per rank (rank 0's pool).
         pub threads: usize,
+    }
+
+    /// What rank 0 hands every rank.
+    #[derive(Clone, serde::Serialize, serde::Deserialize)]
+    pub enum Work {
+        /// A native run of a command: its time loop (`shear::drive`).
+        Run(Job),
+        /// A bench's timed steps of a run (`shear::timed_steps`).
+        Bench(Job, super::Timing),
+        /// The link's latency and bandwidth (`decompose::probe_link`).
+        Link,
     }
 
     /// The universe (MPI finalised when it drops), kept for the life of the process.
@@ -110,7 +143,7 @@ mod mpi_ranks {
         fn drop(&mut self) {
             if let Some(w) = world() {
                 let _turn = ONE_RUN.lock().unwrap_or_else(|e| e.into_inner());
-                let _ = w.exchange::<Option<Job>>(vec![None; w.size()]);
+                let _ = w.exchange::<Option<Work>>(vec![None; w.size()]);
             }
             finish();
         }
@@ -124,18 +157,18 @@ mod mpi_ranks {
         }
     }
 
-    /// Rank 0: hands `job` to every rank; the turn returned is held for the run.
-    pub fn hand_out(world: &Mpi, job: &Job) -> MutexGuard<'static, ()> {
+    /// Rank 0: hands `work` to every rank; the turn returned is held for it.
+    pub fn hand_out(world: &Mpi, work: &Work) -> MutexGuard<'static, ()> {
         let turn = ONE_RUN.lock().unwrap_or_else(|e| e.into_inner());
-        let mut out = vec![Some(job.clone()); world.size()];
+        let mut out = vec![Some(work.clone()); world.size()];
         out[0] = None;
         let _ = world.exchange(out);
         turn
     }
 
-    /// Another rank: the next run rank 0 hands out, or None when told to end.
-    pub fn next_job(world: &Mpi) -> Option<Job> {
-        let got: Vec<Option<Job>> = world.exchange(vec![None; world.size()]);
+    /// Another rank: the next work rank 0 hands out, or None when told to end.
+    pub fn next_work(world: &Mpi) -> Option<Work> {
+        let got: Vec<Option<Work>> = world.exchange(vec![None; world.size()]);
         got.into_iter().next().flatten()
     }
 }

@@ -11,9 +11,9 @@ use crate::packing::Packing;
 use crate::profile::{profiles, ProfileSample, VelocityProfile};
 use crate::run::progress::Progress;
 use crate::series::Series;
-use crate::solver::shear::decompose::Stepper;
+use crate::solver::shear::decompose::{Stepper, Traffic};
 use crate::solver::shear::plate::{plate_triangles, Plate, Side};
-use crate::solver::shear::{PlateRecord, ShearSim};
+use crate::solver::shear::{PhaseTimes, PlateRecord, ShearSim};
 use crate::spec::shear::ShearCase;
 use crate::spec::windows::{is_sample, schedule};
 use crate::vtk;
@@ -274,7 +274,7 @@ pub fn run_native(
         checkpointing,
         case_json: &case_json,
     };
-    let result = step_native(case, packing, sim, first_stage, |stepper| {
+    let result = step_native(case, packing, sim, first_stage, None, |stepper| {
         drive(case, packing, Some(&writes), stepper, first_stage, &mut run)
     });
     let last = match result {
@@ -316,24 +316,33 @@ pub fn run_native(
 /// `sim` at `first_stage`: `sim` itself in one process; under `mpirun` (the `mpi` feature)
 /// brick 0 of the run decomposed over the ranks, which are handed the run here
 /// ([`crate::ranks`], [`serve`]).
-fn step_native(
+fn step_native<R>(
     case: &ShearCase,
     packing: &Packing,
     sim: ShearSim,
     first_stage: usize,
-    f: impl FnOnce(&mut dyn Stepper) -> Result<ShearSim>,
-) -> Result<ShearSim> {
+    timing: Option<crate::ranks::Timing>,
+    f: impl FnOnce(&mut dyn Stepper) -> Result<R>,
+) -> Result<R> {
     #[cfg(feature = "mpi")]
     if let Some(world) = crate::ranks::world() {
+        use crate::ranks::{Job, Work};
         use crate::solver::shear::decompose::{split_for, Brick, BrickRun, Transport};
-        let job = crate::ranks::Job {
+        let job = Job {
             case: case.clone(),
             packing: packing.clone(),
             sim,
             first_stage,
             threads: rayon::current_num_threads(),
         };
-        let _turn = crate::ranks::hand_out(&world, &job);
+        let work = match timing {
+            Some(t) => Work::Bench(job, t),
+            None => Work::Run(job),
+        };
+        let _turn = crate::ranks::hand_out(&world, &work);
+        let (Work::Run(job) | Work::Bench(job, _)) = work else {
+            unreachable!("a run or a bench was handed out")
+        };
         let bricks = split_for(world.size(), case.box_x, case.box_z);
         eprintln!(
             "native run decomposed over {} MPI ranks: {} x {} bricks along x and z, {} \
@@ -350,17 +359,27 @@ fn step_native(
         drop(job);
         return f(&mut stepper);
     }
-    let _ = (case, packing, first_stage);
+    let _ = (case, packing, first_stage, timing);
     let mut sim = sim;
     f(&mut sim)
 }
 
 /// A rank other than 0 under `mpirun`: steps its brick of every native run rank 0 hands out
-/// ([`step_native`]), through the same time loop, writing nothing, until told to end.
+/// ([`step_native`]), through the same time loop (or a bench's timed steps), writing
+/// nothing, until told to end.
 #[cfg(feature = "mpi")]
 pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
-    use crate::solver::shear::decompose::{split_for, Brick, BrickRun, Transport};
-    while let Some(job) = crate::ranks::next_job(world) {
+    use crate::ranks::Work;
+    use crate::solver::shear::decompose::{probe_link, split_for, Brick, BrickRun, Transport};
+    while let Some(work) = crate::ranks::next_work(world) {
+        let (job, timing) = match work {
+            Work::Run(job) => (job, None),
+            Work::Bench(job, t) => (job, Some(t)),
+            Work::Link => {
+                probe_link(world);
+                continue;
+            }
+        };
         let bricks = split_for(world.size(), job.case.box_x, job.case.box_z);
         let pool = match rayon::ThreadPoolBuilder::new()
             .num_threads(job.threads.max(1))
@@ -379,18 +398,105 @@ pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
                 brick: Brick::of(&job.sim, bricks, world.rank()),
                 transport: &world,
             };
-            let mut run = NativeLoop::new(Instant::now());
-            // rank 0 reports the run's outcome; an error is every rank's (agreed on)
-            let _ = drive(
-                &job.case,
-                &job.packing,
-                None,
-                &mut stepper,
-                job.first_stage,
-                &mut run,
-            );
+            // rank 0 reports the outcome; an error is every rank's (agreed on)
+            match timing {
+                Some(t) => {
+                    let _ = timed_steps(&mut stepper, t);
+                }
+                None => {
+                    let mut run = NativeLoop::new(Instant::now());
+                    let _ = drive(
+                        &job.case,
+                        &job.packing,
+                        None,
+                        &mut stepper,
+                        job.first_stage,
+                        &mut run,
+                    );
+                }
+            }
         });
     }
+}
+
+/// What a bench's timed steps measured on one process or on rank 0's brick: wall and CPU
+/// time, phases, neighbour builds and (decomposed) what the exchanges carried.
+#[derive(Clone, Debug)]
+pub struct Timed {
+    pub seconds: f64,
+    pub cpu_seconds: Option<f64>,
+    pub phases: Option<PhaseTimes>,
+    pub rebuilds: u64,
+    pub traffic: Option<Traffic>,
+}
+
+/// CPU time used by this process so far [s] (Linux /proc/self/stat utime + stime, in
+/// USER_HZ = 100 ticks per second): robust to other load on the machine, unlike wall time.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &s[s.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let utime: f64 = f.get(11)?.parse().ok()?;
+    let stime: f64 = f.get(12)?.parse().ok()?;
+    Some((utime + stime) / 100.0)
+}
+
+/// A bench's steps ([`crate::ranks::Timing`]) of a stepper: every brick of a decomposed
+/// run makes the same calls.
+pub fn timed_steps(s: &mut dyn Stepper, t: crate::ranks::Timing) -> Result<Timed> {
+    s.local().set_kernel(t.kernel)?;
+    s.setup(0.0)?;
+    s.step()?;
+    s.setup(t.speed)?;
+    for _ in 0..t.warm {
+        s.step()?;
+    }
+    s.setup(t.speed)?;
+    s.local().time_phases(true);
+    let builds0 = s.local().neighbor_builds();
+    let traffic0 = s.traffic();
+    let (t0, c0) = (Instant::now(), process_cpu_seconds());
+    for _ in 0..t.timed {
+        s.step()?;
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    let cpu_seconds = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
+    let local = s.local();
+    local.check_finite()?;
+    Ok(Timed {
+        seconds,
+        cpu_seconds,
+        phases: local.phase_times(),
+        rebuilds: local.neighbor_builds() - builds0,
+        traffic: s.traffic().zip(traffic0).map(|(b, a)| b.since(&a)),
+    })
+}
+
+/// A bench's native run of `case` from `packing`: this process's, or under `mpirun` (the
+/// `mpi` feature) decomposed over the ranks, timed on rank 0's brick; `after` reads the
+/// stepper at the end (one process's state, or rank 0's brick).
+pub fn bench_native<R>(
+    case: &ShearCase,
+    packing: &Packing,
+    timing: crate::ranks::Timing,
+    after: impl FnOnce(&mut dyn Stepper) -> R,
+) -> Result<(Timed, R)> {
+    let sim = ShearSim::new(&case.setup(), packing);
+    step_native(case, packing, sim, 0, Some(timing), |s| {
+        let timed = timed_steps(s, timing)?;
+        Ok((timed, after(s)))
+    })
+}
+
+/// The link between the ranks under `mpirun` (the `mpi` feature), measured by every rank
+/// ([`crate::solver::shear::decompose::probe_link`]); None in one process.
+pub fn probe_ranks_link() -> Option<crate::solver::shear::decompose::Link> {
+    #[cfg(feature = "mpi")]
+    if let Some(world) = crate::ranks::world() {
+        let _turn = crate::ranks::hand_out(&world, &crate::ranks::Work::Link);
+        return Some(crate::solver::shear::decompose::probe_link(&world));
+    }
+    None
 }
 
 /// What a native run collects as it goes (and its checkpoint holds).

@@ -118,6 +118,27 @@ fn a_build_without_mpi_refuses_to_run_as_several_ranks() {
     assert!(!dir.path().join("out").exists(), "it ran anyway");
 }
 
+/// `verify bench --ranks 2` in a build without the `mpi` feature: an error naming the
+/// field and the feature, before any work.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_bench_over_ranks_needs_the_mpi_feature() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let o = std::process::Command::new(common::verify_bin())
+        .args(["bench", "--native-only", "--ranks", "1,2", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("`--ranks`") && e.contains("--features mpi"),
+        "{e}"
+    );
+    assert!(!out.join("bench.json").exists());
+}
+
 #[test]
 fn reference_mode_needs_no_liggghts() {
     let dir = tempfile::tempdir().unwrap();

@@ -142,3 +142,82 @@ fn a_run_killed_on_two_ranks_resumes_on_three_to_the_same_bytes() {
     );
     same_outputs(&one, &cut, "killed on 2 ranks, resumed on 3");
 }
+
+/// `verify bench --ranks 1,2`: the 2-rank rows come from `mpirun -np 2` of the same binary
+/// stepping the same trajectory (as many neighbour rebuilds as one process), with what rank
+/// 0's exchanges carried; the link between the ranks is measured and the scaling model fitted
+/// (issue #39). Under `mpirun` itself the bench refuses to run LIGGGHTS beside its ranks.
+#[test]
+fn the_bench_measures_two_ranks_beside_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b");
+    let o = verify(&[
+        "bench",
+        "--native-only",
+        "--ranks",
+        "1,2",
+        "--threads",
+        "1",
+        "--kernels",
+        "scalar",
+        "--steps",
+        "200",
+        "--compression-steps",
+        "3000",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    ran(&o, "verify bench --ranks 1,2");
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let rows = r["rows"].as_array().unwrap();
+    let of = |ranks: u64| {
+        rows.iter()
+            .find(|x| x["code"] == "native" && x["ranks"] == ranks)
+            .unwrap_or_else(|| panic!("a native row of {ranks} rank(s): {r}"))
+    };
+    let (one, two) = (of(1), of(2));
+    let rebuilds = one["rebuilds"].as_u64().unwrap();
+    assert!(rebuilds > 0, "{one}");
+    assert_eq!(
+        two["rebuilds"].as_u64(),
+        Some(rebuilds),
+        "the same trajectory"
+    );
+    assert!(
+        one["traffic"].is_null() && one["phases"]["comm"] == 0.0,
+        "{one}"
+    );
+    let t = &two["traffic"];
+    // two exchanges a step at least, each a message to the other rank with the ghosts
+    assert!(t["calls"].as_u64().unwrap() >= 400, "{t}");
+    assert!(t["messages"].as_u64().unwrap() >= 400, "{t}");
+    assert!(t["bytes"].as_u64().unwrap() > 200 * 72 * 100, "{t}");
+    assert!(two["phases"]["comm"].as_f64().unwrap() > 0.0, "{two}");
+    assert!(
+        two["per_particle"].is_null(),
+        "a brick's counts are not the run's"
+    );
+    assert!(r["native_ranks_2_vs_1"].as_f64().unwrap() > 0.0);
+    assert!(
+        r["link"]["latency_s"].as_f64().unwrap() > 0.0,
+        "{}",
+        r["link"]
+    );
+    let points = r["scaling"]["points"].as_array().unwrap();
+    let p2 = points
+        .iter()
+        .find(|p| p["ranks"] == 2)
+        .expect("2 ranks modelled");
+    assert!(p2["ghost_fraction"].as_f64().unwrap() > 0.0, "{p2}");
+    assert!(p2["pair_overhead"].as_f64().unwrap() > 1.0, "{p2}");
+    assert!(p2["here_built_s"].as_f64().unwrap() > 0.0, "{p2}");
+
+    let o = mpirun(2)
+        .args(["bench", "--out"])
+        .arg(dir.path().join("c"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o));
+    assert!(text(&o).contains("`--native-only`"), "{}", text(&o));
+}

@@ -56,6 +56,10 @@ pub struct BenchArgs {
     /// medians of the rounds' ratios, robust to a machine whose speed drifts.
     #[arg(long, default_value_t = 1)]
     pub rounds: usize,
+    /// MPI rank counts of the native runs (a build with the `mpi` feature): 1 in this
+    /// process, more by `mpirun -np R` of this verify (e.g. `--ranks 1,2`).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub ranks: Vec<usize>,
     #[command(flatten)]
     pub liggghts: LiggghtsArgs,
     /// Output directory (default: a new directory under ./runs/).
@@ -79,6 +83,7 @@ pub fn bench(a: BenchArgs) -> Result<Verdict> {
         compression_steps: a.compression_steps,
         liggghts: (!a.native_only).then(|| a.liggghts.request(SHEAR_TIMEOUT_S)),
         rounds: a.rounds,
+        ranks: a.ranks.clone(),
         out: out_or_default(a.out.as_deref(), "bench"),
     };
     run(&req)?;

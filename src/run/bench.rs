@@ -9,12 +9,15 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::{last_loop_time, last_neighbor_builds, LOG_NAME};
 use crate::packing::{loose_packing, Packing};
-use crate::solver::shear::{compact, KernelPath, PhaseTimes, ShearSim};
+use crate::ranks::Timing;
+use crate::shear::{bench_native, probe_ranks_link, Timed};
+use crate::solver::shear::decompose::{Link, Traffic};
+use crate::solver::shear::{compact, KernelPath, PhaseTimes};
 use crate::spec::shear::{Preset, ShearCase, Stage};
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
-use std::time::Instant;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 
 /// A throughput measurement of both codes on the same dense state.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -39,14 +42,26 @@ pub struct BenchRequest {
     /// Rounds of every native and every LIGGGHTS run, in that order: the ratios are the
     /// medians of the rounds' ratios (a round's two codes run a minute apart, so a machine
     /// whose speed drifts affects both alike), the rates the medians of the rounds' rates.
-    #[serde(default = "one_round")]
+    #[serde(default = "one")]
     pub rounds: usize,
+    /// MPI rank counts of the native runs (the `mpi` feature): 1 in this process, more by
+    /// `mpirun -np R` of this binary's `verify bench` (each rank with every thread count).
+    /// Under `mpirun` itself, the world's size alone.
+    #[serde(default = "one_rank")]
+    pub ranks: Vec<usize>,
     pub out: PathBuf,
 }
 
-fn one_round() -> usize {
+fn one() -> usize {
     1
 }
+
+fn one_rank() -> Vec<usize> {
+    vec![1]
+}
+
+/// The rank counts the scaling model predicts (where the bricks stay wider than the cut).
+pub const MODEL_RANKS: [usize; 9] = [1, 2, 4, 16, 64, 128, 256, 512, 1024];
 
 /// The most rounds one bench makes.
 pub const MAX_ROUNDS: usize = 50;
@@ -57,8 +72,11 @@ pub struct BenchRow {
     /// The round this run belongs to (0 to [`BenchRequest::rounds`] - 1).
     #[serde(default)]
     pub round: usize,
-    /// Threads (native) or MPI processes (LIGGGHTS).
+    /// Threads (native: per rank) or MPI processes (LIGGGHTS).
     pub workers: usize,
+    /// Native: MPI ranks the run was decomposed over (1: one process).
+    #[serde(default = "one")]
+    pub ranks: usize,
     pub particles: usize,
     pub steps: u64,
     pub seconds: f64,
@@ -83,6 +101,9 @@ pub struct BenchRow {
     /// large particle counts more often than at small ones.
     #[serde(default)]
     pub rebuilds: Option<u64>,
+    /// Native over ranks: what rank 0's exchanges carried during the timed steps.
+    #[serde(default)]
+    pub traffic: Option<Traffic>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -105,6 +126,21 @@ pub struct BenchReport {
     /// Each round's native 2 threads / native 1 thread.
     #[serde(default)]
     pub rounds_native_2_vs_1: Vec<f64>,
+    /// native 2 ranks x 1 thread / native 1 rank x 1 thread (median of the rounds), and each
+    /// round's.
+    #[serde(default)]
+    pub native_ranks_2_vs_1: Option<f64>,
+    #[serde(default)]
+    pub rounds_native_ranks_2_vs_1: Vec<f64>,
+    /// LIGGGHTS 2 processes / LIGGGHTS 1 process (median of the rounds).
+    #[serde(default)]
+    pub liggghts_2_vs_1: Option<f64>,
+    /// The link between the ranks, measured under `mpirun` (the first rank count above 1).
+    #[serde(default)]
+    pub link: Option<Link>,
+    /// The scaling model fitted to the 1-rank run ([`super::scaling`]).
+    #[serde(default)]
+    pub scaling: Option<super::scaling::Scaling>,
     /// The kernel path the ratios above use.
     #[serde(default)]
     pub kernel: Option<KernelPath>,
@@ -144,17 +180,6 @@ fn peak_rss() -> Option<f64> {
 fn reset_peak_rss() -> Option<f64> {
     std::fs::write("/proc/self/clear_refs", "5").ok()?;
     status_bytes("VmRSS")
-}
-
-/// CPU time used by this process so far [s] (Linux /proc/self/stat utime + stime, in
-/// USER_HZ = 100 ticks per second).
-fn process_cpu_seconds() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
-    let rest = &s[s.rfind(')')? + 1..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let utime: f64 = f.get(11)?.parse().ok()?;
-    let stime: f64 = f.get(12)?.parse().ok()?;
-    Some((utime + stime) / 100.0)
 }
 
 /// `N neighbour rebuilds in S steps (every S/N steps)`.
@@ -216,6 +241,190 @@ impl super::Versioned for BenchReport {
     }
 }
 
+/// The rank count this bench's native runs are decomposed over: the world's under `mpirun`
+/// (then `--ranks` must be it alone, and LIGGGHTS is not run: the serving ranks would share
+/// its cores), else 1 (more ranks are measured by child benches under `mpirun`).
+fn world_ranks(a: &BenchRequest) -> Result<usize> {
+    let world = crate::ranks::native_ranks();
+    if world > 1 {
+        if a.ranks != [world] && a.ranks != [1] {
+            return Err(Error::invalid(
+                "--ranks",
+                format!("{:?}", a.ranks),
+                format!(
+                    "{world} alone under `mpirun -np {world}` (run verify bench without mpirun \
+                     to measure several rank counts)"
+                ),
+            ));
+        }
+        if a.liggghts.is_some() {
+            return Err(Error::invalid(
+                "--native-only",
+                "off",
+                "on under mpirun (LIGGGHTS would share the cores the waiting ranks spin on; \
+                 run verify bench without mpirun to measure both codes)",
+            ));
+        }
+    } else if a.ranks.iter().any(|&r| r > 1) && !cfg!(feature = "mpi") {
+        return Err(Error::invalid(
+            "--ranks",
+            format!("{:?}", a.ranks),
+            "1 in a build without MPI (install with `cargo install --path . --features mpi`)",
+        ));
+    }
+    Ok(world)
+}
+
+/// Prints one row's lines.
+fn print_row(r: &BenchRow) {
+    let per = 1e9 / (r.steps as f64 * r.particles as f64);
+    match r.code.as_str() {
+        "native" => {
+            let ranks = if r.ranks > 1 {
+                format!("{} ranks x ", r.ranks)
+            } else {
+                String::new()
+            };
+            println!(
+                "  native   {ranks}{} thread(s), {} kernel: {:8.2} s  {:.3e} particle-steps/s  \
+                 ({:.3e} per core; CPU {})",
+                r.workers,
+                r.kernel.map(|k| k.name()).unwrap_or("?"),
+                r.seconds,
+                r.particle_steps_per_s,
+                r.per_core,
+                r.cpu_seconds
+                    .map(|c| format!(
+                        "{c:.2} s{}, {:.3e} particle-steps per CPU-second",
+                        if r.ranks > 1 { " on rank 0" } else { "" },
+                        r.steps as f64 * r.particles as f64 / c / r.ranks as f64
+                    ))
+                    .unwrap_or_else(|| "time not available".into())
+            );
+            if let Some(ph) = &r.phases {
+                let parts: Vec<String> = ph
+                    .named()
+                    .iter()
+                    .filter(|(name, sec)| *sec > 0.0 || *name != "communication")
+                    .map(|(name, sec)| format!("{name} {:.1}", sec * per))
+                    .collect();
+                println!(
+                    "           ns per particle-step{}: {}",
+                    if r.ranks > 1 { " (rank 0)" } else { "" },
+                    parts.join(", ")
+                );
+            }
+            if let Some(t) = &r.traffic {
+                let steps = r.steps as f64;
+                println!(
+                    "           rank 0 exchanged {:.1} times, sent {:.1} messages and {:.1} kB per \
+                     step, {:.1} us per step in exchanges",
+                    t.calls as f64 / steps,
+                    t.messages as f64 / steps,
+                    t.bytes as f64 / steps / 1e3,
+                    t.seconds / steps * 1e6
+                );
+            }
+            if let Some(pp) = r.per_particle {
+                println!(
+                    "           per particle: {:.2} listed pairs, {:.2} touching pairs, {:.3} \
+                     plate contacts",
+                    pp.0, pp.1, pp.2
+                );
+            }
+            if let Some(b) = r.rebuilds {
+                println!("           {}", rebuild_line(b, r.steps));
+            }
+        }
+        _ => {
+            println!(
+                "  LIGGGHTS {} process(es): {:8.2} s  {:.3e} particle-steps/s  ({:.3e} per core)",
+                r.workers, r.seconds, r.particle_steps_per_s, r.per_core
+            );
+            if let Some(b) = r.rebuilds {
+                println!("           {}", rebuild_line(b, r.steps));
+            }
+        }
+    }
+}
+
+/// The native rows of `ranks` ranks: this binary's `verify bench` under `mpirun -np ranks`
+/// (native only, one round, every thread count and kernel path), its outputs in `dir`
+/// (`bench.json`, `bench.log`); its rows and the link it measured.
+fn rows_over_ranks(
+    a: &BenchRequest,
+    ranks: usize,
+    dir: &Path,
+) -> Result<(Vec<BenchRow>, Option<Link>)> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let exe = std::env::current_exe().map_err(|e| Error::io("verify", e))?;
+    let log = dir.join("bench.log");
+    let out = std::fs::File::create(&log).map_err(|e| Error::io(&log, e))?;
+    let err = out.try_clone().map_err(|e| Error::io(&log, e))?;
+    let list = |v: Vec<String>| v.join(",");
+    let mut cmd = Command::new("mpirun");
+    cmd.arg("--allow-run-as-root");
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if ranks * a.threads.iter().copied().max().unwrap_or(1) > cores {
+        cmd.arg("--oversubscribe");
+    }
+    cmd.args(["-np", &ranks.to_string()])
+        .arg(&exe)
+        .arg("bench")
+        .args(["--preset", a.preset.keyword()])
+        .args(["--steps", &a.steps.to_string()])
+        .args([
+            "--threads",
+            &list(a.threads.iter().map(|t| t.to_string()).collect()),
+        ])
+        .args([
+            "--kernels",
+            &list(a.kernels.iter().map(|k| k.name().to_string()).collect()),
+        ])
+        .args(["--particles", &a.particles.to_string()])
+        .args(["--compression-steps", &a.compression_steps.to_string()])
+        .args([
+            "--ranks",
+            &ranks.to_string(),
+            "--native-only",
+            "--rounds",
+            "1",
+        ])
+        .arg("--out")
+        .arg(dir)
+        .stdin(Stdio::null())
+        .stdout(out)
+        .stderr(err);
+    let status = cmd
+        .status()
+        .map_err(|e| Error::io("mpirun (is openmpi-bin installed?)", e))?;
+    if !status.success() {
+        let text = std::fs::read_to_string(&log).unwrap_or_default();
+        let tail: Vec<&str> = text.lines().rev().take(15).collect();
+        return Err(Error::Ranks(format!(
+            "verify bench on {ranks} ranks failed ({status}); the end of {}:\n{}",
+            log.display(),
+            tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+        )));
+    }
+    let child: BenchReport = super::load(&dir.join("bench.json"))?;
+    let rows: Vec<BenchRow> = child
+        .rows
+        .into_iter()
+        .filter(|r| r.code == "native" && r.ranks == ranks)
+        .collect();
+    if rows.len() != a.threads.len() * a.kernels.len() {
+        return Err(Error::Ranks(format!(
+            "verify bench on {ranks} ranks gave {} native rows of {} ranks, not {} ({})",
+            rows.len(),
+            ranks,
+            a.threads.len() * a.kernels.len(),
+            dir.join("bench.json").display()
+        )));
+    }
+    Ok((rows, child.link))
+}
+
 /// Measures, prints, writes `bench.json`; the report.
 pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     if a.steps == 0 {
@@ -226,6 +435,18 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     }
     for &p in &a.procs {
         super::check_threads("--procs", p)?;
+    }
+    if a.ranks.is_empty() {
+        return Err(Error::invalid(
+            "--ranks",
+            "(none)",
+            "one or more of 1 ..= 1024",
+        ));
+    }
+    for &r in &a.ranks {
+        if !(1..=1024).contains(&r) {
+            return Err(Error::invalid("--ranks", r, "1 ..= 1024"));
+        }
     }
     crate::spec::shear::check_particles("--particles", a.particles)?;
     super::check_memory("--particles", a.particles)?;
@@ -246,6 +467,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     for k in &a.kernels {
         k.checked("--kernels")?;
     }
+    let world = world_ranks(a)?;
     let base = ShearCase::preset(a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
     base.validate(false)?;
     let k = ((a.particles as f64 / base.particles as f64).sqrt().round() as usize).max(1);
@@ -284,132 +506,140 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let steps = c.stage_steps();
     c.output_every = c.total_steps();
     c.snapshot_every = 0;
+    let mut link = if world > 1 {
+        let l = probe_ranks_link();
+        if let Some(l) = &l {
+            println!(
+                "  link between the {world} ranks: {:.2} us per message, {:.2} GB/s",
+                l.latency_s * 1e6,
+                1e-9 / l.seconds_per_byte.max(1e-15)
+            );
+        }
+        l
+    } else {
+        None
+    };
     let mut rows = Vec::new();
     let mut rss_native = None;
     let mut held_native: Vec<(String, f64)> = Vec::new();
+    let mut scaling = None;
     for round in 0..a.rounds {
         if a.rounds > 1 {
             println!("  round {} of {}", round + 1, a.rounds);
         }
-        for &kernel in &a.kernels {
-            for &t in &a.threads {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(t)
-                    .build()
-                    .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-                type Timed = (
-                    f64,
-                    Option<f64>,
-                    Option<PhaseTimes>,
-                    (usize, usize, usize),
-                    Vec<(&'static str, usize)>,
-                    (usize, usize),
-                    u64,
-                );
-                // the solver's own peak: from the resident set just before it is made (the input
-                // state and the compaction's leftovers excluded)
-                let before = if rss_native.is_none() {
-                    reset_peak_rss()
-                } else {
-                    None
-                };
-                let (secs, cpu, phases, counts, held, cand, rebuilds) =
-                    pool.install(|| -> Result<Timed> {
-                        let mut s = ShearSim::new(&c.setup(), &state);
-                        s.set_kernel(kernel)?;
-                        s.setup(0.0)?;
-                        s.step()?;
-                        s.setup(speed)?;
-                        for _ in 0..steps[0] {
-                            s.step()?;
-                        }
-                        s.setup(speed)?;
-                        s.time_phases(true);
-                        let builds0 = s.neighbor_builds();
-                        let (t0, c0) = (Instant::now(), process_cpu_seconds());
-                        for _ in 0..steps[1] {
-                            s.step()?;
-                        }
-                        let el = t0.elapsed().as_secs_f64();
-                        let cpu = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
-                        s.check_finite()?;
-                        Ok((
-                            el,
-                            cpu,
-                            s.phase_times(),
-                            s.contact_counts(),
-                            s.memory(),
-                            s.plate_candidates(),
-                            s.neighbor_builds() - builds0,
-                        ))
-                    })?;
-                if rss_native.is_none() {
-                    held_native = held
-                        .iter()
-                        .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
-                        .collect();
-                    rss_native = match (before, peak_rss()) {
-                        (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
-                        _ => {
-                            println!(
-                                "  (the peak resident set cannot be reset here: the memory figure \
-                             counts the input state and the compaction too)"
-                            );
-                            rss0.zip(peak_rss()).map(|(a0, a1)| (a1 - a0) / n as f64)
-                        }
+        let here = if world > 1 { world } else { 1 };
+        if world > 1 || a.ranks.contains(&1) {
+            for &kernel in &a.kernels {
+                for &t in &a.threads {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(t)
+                        .build()
+                        .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
+                    // the solver's own peak: from the resident set just before it is made (the
+                    // input state and the compaction's leftovers excluded)
+                    let first = rss_native.is_none() && world == 1;
+                    let before = if first { reset_peak_rss() } else { None };
+                    let timing = Timing {
+                        warm: steps[0],
+                        timed: steps[1],
+                        speed,
+                        kernel,
                     };
+                    let model_now = scaling.is_none() && world == 1 && t == 1;
+                    let (timed, (counts, held, cand, model)) = pool.install(|| {
+                        bench_native(&c, &state, timing, |s| {
+                            let l = s.local();
+                            (
+                                l.contact_counts(),
+                                l.memory(),
+                                l.plate_candidates(),
+                                // the 1-rank run's state and costs for the scaling model
+                                model_now.then(|| (l.clone(), l.listed_pairs())),
+                            )
+                        })
+                    })?;
+                    let Timed {
+                        seconds: secs,
+                        cpu_seconds: cpu,
+                        phases,
+                        rebuilds,
+                        traffic,
+                    } = timed;
+                    if let Some((sim, pairs)) = model {
+                        scaling = phases
+                            .as_ref()
+                            .and_then(|p| super::scaling::Costs::of(p, pairs, n, rebuilds))
+                            .map(|costs| (sim, costs));
+                    }
+                    if first {
+                        held_native = held
+                            .iter()
+                            .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
+                            .collect();
+                        rss_native = match (before, peak_rss()) {
+                            (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
+                            _ => {
+                                println!(
+                                    "  (the peak resident set cannot be reset here: the memory \
+                                     figure counts the input state and the compaction too)"
+                                );
+                                rss0.zip(peak_rss()).map(|(a0, a1)| (a1 - a0) / n as f64)
+                            }
+                        };
+                    }
+                    let r = steps[1] as f64 * n as f64 / secs;
+                    let row = BenchRow {
+                        code: "native".into(),
+                        round,
+                        workers: t,
+                        ranks: here,
+                        particles: n,
+                        steps: steps[1],
+                        seconds: secs,
+                        cpu_seconds: cpu,
+                        particle_steps_per_s: r,
+                        per_core: r / (t * here) as f64,
+                        kernel: Some(kernel),
+                        phases,
+                        // a brick's counts are of its own particles and ghosts: one process's only
+                        per_particle: (here == 1).then(|| {
+                            (
+                                counts.0 as f64 / n as f64,
+                                counts.1 as f64 / n as f64,
+                                counts.2 as f64 / n as f64,
+                            )
+                        }),
+                        rebuilds: Some(rebuilds),
+                        traffic,
+                    };
+                    print_row(&row);
+                    if here == 1 {
+                        println!(
+                            "           {:.1} % of the particles test {:.1} plate triangles each",
+                            100.0 * cand.0 as f64 / n as f64,
+                            cand.1 as f64 / cand.0.max(1) as f64
+                        );
+                    }
+                    rows.push(row);
                 }
-                let r = steps[1] as f64 * n as f64 / secs;
+            }
+        }
+        if world == 1 {
+            for &r in a.ranks.iter().filter(|&&r| r > 1) {
+                let dir = out.join(format!("ranks{r}_round{round}"));
                 println!(
-                    "  native   {t} thread(s), {} kernel: {secs:8.2} s  {r:.3e} particle-steps/s  \
-                 ({:.3e} per core; CPU {})",
-                    kernel.name(),
-                    r / t as f64,
-                    cpu.map(|c| format!(
-                        "{c:.2} s, {:.3e} particle-steps per CPU-second",
-                        steps[1] as f64 * n as f64 / c
-                    ))
-                    .unwrap_or_else(|| "time not available".into())
+                    "  native over {r} MPI ranks: `mpirun -np {r} verify bench` (log {})",
+                    dir.join("bench.log").display()
                 );
-                if let Some(ph) = &phases {
-                    let per = 1e9 / (steps[1] as f64 * n as f64);
-                    let parts: Vec<String> = ph
-                        .named()
-                        .iter()
-                        .map(|(name, sec)| format!("{name} {:.1}", sec * per))
-                        .collect();
-                    println!("           ns per particle-step: {}", parts.join(", "));
+                let (got, l) = rows_over_ranks(a, r, &dir)?;
+                if link.is_none() {
+                    link = l;
                 }
-                let per_particle = (
-                    counts.0 as f64 / n as f64,
-                    counts.1 as f64 / n as f64,
-                    counts.2 as f64 / n as f64,
-                );
-                println!(
-                "           per particle: {:.2} listed pairs, {:.2} touching pairs, {:.3} plate \
-                 contacts; {:.1} % of the particles test {:.1} plate triangles each",
-                per_particle.0,
-                per_particle.1,
-                per_particle.2,
-                100.0 * cand.0 as f64 / n as f64,
-                cand.1 as f64 / cand.0.max(1) as f64
-            );
-                println!("           {}", rebuild_line(rebuilds, steps[1]));
-                rows.push(BenchRow {
-                    code: "native".into(),
-                    round,
-                    workers: t,
-                    particles: n,
-                    steps: steps[1],
-                    seconds: secs,
-                    cpu_seconds: cpu,
-                    particle_steps_per_s: r,
-                    per_core: r / t as f64,
-                    kernel: Some(kernel),
-                    phases,
-                    per_particle: Some(per_particle),
-                    rebuilds: Some(rebuilds),
-                });
+                for mut row in got {
+                    row.round = round;
+                    print_row(&row);
+                    rows.push(row);
+                }
             }
         }
         if let Some(lr) = &a.liggghts {
@@ -424,14 +654,11 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                 let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
                 let rebuilds = last_neighbor_builds(&dir.join(LOG_NAME))?;
                 let r = st as f64 * n as f64 / secs;
-                println!("  LIGGGHTS {p} process(es): {secs:8.2} s  {r:.3e} particle-steps/s  ({:.3e} per core)", r / p as f64);
-                if let Some(b) = rebuilds {
-                    println!("           {}", rebuild_line(b, st));
-                }
-                rows.push(BenchRow {
+                let row = BenchRow {
                     code: "liggghts".into(),
                     round,
                     workers: p,
+                    ranks: p,
                     particles: n,
                     steps: st,
                     seconds: secs,
@@ -442,15 +669,18 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     phases: None,
                     per_particle: None,
                     rebuilds,
-                });
+                    traffic: None,
+                };
+                print_row(&row);
+                rows.push(row);
             }
         }
     }
     // a configuration's rate: the median of its rounds
-    let rate = |code: &str, w: usize, k: Option<KernelPath>| {
+    let rate = |code: &str, w: usize, ranks: usize, k: Option<KernelPath>| {
         median(
             rows.iter()
-                .filter(|r| r.code == code && r.workers == w && r.kernel == k)
+                .filter(|r| r.code == code && r.workers == w && r.ranks == ranks && r.kernel == k)
                 .map(|r| r.particle_steps_per_s)
                 .collect(),
         )
@@ -459,48 +689,60 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let kernel = a
         .kernels
         .iter()
-        .filter_map(|&k| rate("native", 1, Some(k)).map(|r| (k, r)))
+        .filter_map(|&k| rate("native", 1, 1, Some(k)).map(|r| (k, r)))
         .max_by(|x, y| x.1.total_cmp(&y.1))
         .map(|(k, _)| k);
-    let in_round = |code: &str, w: usize, round: usize| {
+    let in_round = |code: &str, w: usize, ranks: usize, round: usize| {
         rows.iter()
             .find(|r| {
                 r.code == code
                     && r.workers == w
+                    && r.ranks == ranks
                     && r.round == round
                     && (code != "native" || r.kernel == kernel)
             })
             .map(|r| r.particle_steps_per_s)
     };
-    let per_round = |num: (&str, usize), den: (&str, usize)| -> Vec<f64> {
+    let per_round = |num: (&str, usize, usize), den: (&str, usize, usize)| -> Vec<f64> {
         (0..a.rounds)
             .filter_map(|k| {
-                in_round(num.0, num.1, k)
-                    .zip(in_round(den.0, den.1, k))
+                in_round(num.0, num.1, num.2, k)
+                    .zip(in_round(den.0, den.1, den.2, k))
                     .map(|(x, y)| x / y)
             })
             .collect()
     };
-    let rounds_native_vs_liggghts_1 = per_round(("native", 1), ("liggghts", 1));
-    let rounds_native_2_vs_1 = per_round(("native", 2), ("native", 1));
+    let rounds_native_vs_liggghts_1 = per_round(("native", 1, 1), ("liggghts", 1, 1));
+    let rounds_native_2_vs_1 = per_round(("native", 2, 1), ("native", 1, 1));
+    let rounds_native_ranks_2_vs_1 = per_round(("native", 1, 2), ("native", 1, 1));
     let native_vs_liggghts_1 = median(rounds_native_vs_liggghts_1.clone());
     let native_2_vs_1 = median(rounds_native_2_vs_1.clone());
+    let native_ranks_2_vs_1 = median(rounds_native_ranks_2_vs_1.clone());
+    let liggghts_2_vs_1 = median(per_round(("liggghts", 2, 2), ("liggghts", 1, 1)));
     // one paper run: 2500 particles, the paper preset's steps
     let paper = ShearCase::preset(Preset::Paper, RollingModel::Epsd, 0.5, 0.5, 1)?;
     let paper_ps = paper.total_steps() as f64 * paper.particles as f64;
     let mut paper_run_hours = Vec::new();
     for r in rows.iter().filter(|r| r.round == 0) {
-        let Some(median_rate) = rate(&r.code, r.workers, r.kernel) else {
+        let Some(median_rate) = rate(&r.code, r.workers, r.ranks, r.kernel) else {
             continue;
+        };
+        let ranks = if r.code == "native" && r.ranks > 1 {
+            format!("{} ranks ", r.ranks)
+        } else {
+            String::new()
         };
         paper_run_hours.push((
             match r.kernel {
-                Some(k) => format!("{} x{} ({})", r.code, r.workers, k.name()),
+                Some(k) => format!("{} {ranks}x{} ({})", r.code, r.workers, k.name()),
                 None => format!("{} x{}", r.code, r.workers),
             },
             paper_ps / median_rate / 3600.0,
         ));
     }
+    let scaling =
+        scaling.map(|(sim, costs)| super::scaling::model(&sim, costs, link, &MODEL_RANKS));
+    let measured_2_ranks = rate("native", 1, 2, kernel);
     let report = BenchReport {
         schema: super::SCHEMA,
         preset: a.preset,
@@ -511,6 +753,11 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         native_2_vs_1,
         rounds_native_vs_liggghts_1,
         rounds_native_2_vs_1,
+        native_ranks_2_vs_1,
+        rounds_native_ranks_2_vs_1,
+        liggghts_2_vs_1,
+        link,
+        scaling,
         kernel,
         native_bytes_per_particle: rss_native,
         native_held_per_particle: held_native.clone(),
@@ -536,6 +783,15 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             rounds(&report.rounds_native_2_vs_1)
         );
     }
+    if let Some(x) = native_ranks_2_vs_1 {
+        println!(
+            "  native 2 ranks x 1 thread / native 1 thread = {x:.2}{}",
+            rounds(&report.rounds_native_ranks_2_vs_1)
+        );
+    }
+    if let Some(x) = liggghts_2_vs_1 {
+        println!("  LIGGGHTS 2 processes / LIGGGHTS 1 process = {x:.2}");
+    }
     if let Some(b) = rss_native {
         println!("  native memory: {b:.0} bytes per particle (peak RSS growth of the solver)");
     }
@@ -556,6 +812,26 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             "  estimated full paper run ({} steps x 2500 particles): {who}: {hrs:.1} h",
             paper.total_steps()
         );
+    }
+    if let Some(sc) = &report.scaling {
+        for line in super::scaling::table(sc) {
+            println!("{line}");
+        }
+        // the model against what ran here: 2 ranks x 1 thread
+        if let (Some(p2), Some(measured)) =
+            (sc.points.iter().find(|p| p.ranks == 2), measured_2_ranks)
+        {
+            if let Some(pred) = p2.here_built_s {
+                let measured_s = n as f64 / measured;
+                println!(
+                    "  model check, 2 ranks x 1 thread here: predicted {:.1} us per step, \
+                     measured {:.1} us (measured / predicted {:.2})",
+                    pred * 1e6,
+                    measured_s * 1e6,
+                    measured_s / pred
+                );
+            }
+        }
     }
     write_atomic(
         &out.join("bench.json"),

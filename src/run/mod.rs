@@ -17,6 +17,7 @@ pub mod nightly;
 pub mod nightly_outcome;
 pub mod progress;
 pub mod replay;
+pub mod scaling;
 pub mod shear;
 pub mod sweep;
 

@@ -31,16 +31,23 @@ impl Bricks {
     }
 
     /// The brick that owns a particle at `x` (between rebuilds a particle may have drifted past
-    /// a periodic side: it is owned where it wraps to).
+    /// a periodic side: it is owned where it wraps to): the one whose extent holds it along
+    /// each axis, found from the quotient and checked against the extents' own bounds (a
+    /// coordinate that rounds up to the box length is the last brick's along that axis).
     pub fn owner(&self, x: V3) -> usize {
         let (wx, wz) = (x[0].rem_euclid(self.lx), x[2].rem_euclid(self.lz));
-        (0..self.count())
-            .find(|&b| {
-                let ([x0, x1], [z0, z1]) = self.extent(b);
-                (x0..x1).contains(&wx) && (z0..z1).contains(&wz)
-            })
-            // rem_euclid may round up to the box length itself: the last brick's
-            .unwrap_or(self.count() - 1)
+        let slab = |w: f64, l: f64, n: usize| {
+            let edge = |r: usize| l * r as f64 / n as f64;
+            let mut i = ((w / l * n as f64) as usize).min(n - 1);
+            while i > 0 && w < edge(i) {
+                i -= 1;
+            }
+            while i + 1 < n && w >= edge(i + 1) {
+                i += 1;
+            }
+            i
+        };
+        slab(wx, self.lx, self.nx) * self.nz + slab(wz, self.lz, self.nz)
     }
 
     /// Whether a particle at `p` (wrapped) is brick `b`'s: its own, or within `cut` of it
@@ -100,4 +107,50 @@ pub fn sum_in_order(terms: impl Iterator<Item = (V3, V3)>) -> (V3, V3) {
         }
     }
     (tb, tt)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The owner is the brick whose extent holds the wrapped position, at the extents' own
+    /// edges too (each edge is the start of the next brick's extent), for every split.
+    #[test]
+    fn the_owner_is_the_brick_whose_extent_holds_the_point() {
+        let (lx, lz) = (4.0e-3, 2.4e-3);
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for nx in 1..=5 {
+            for nz in 1..=5 {
+                let b = Bricks { nx, nz, lx, lz };
+                let mut points: Vec<V3> = (0..200)
+                    .map(|_| [(next() * 3.0 - 1.0) * lx, 0.0, (next() * 3.0 - 1.0) * lz])
+                    .collect();
+                for i in 0..=nx {
+                    for k in 0..=nz {
+                        points.push([lx * i as f64 / nx as f64, 0.0, lz * k as f64 / nz as f64]);
+                    }
+                }
+                for p in points {
+                    let (wx, wz) = (p[0].rem_euclid(lx), p[2].rem_euclid(lz));
+                    let o = b.owner(p);
+                    let ([x0, x1], [z0, z1]) = b.extent(o);
+                    let inside = |w: f64, a: f64, c: f64, l: f64, last: bool| {
+                        (a..c).contains(&w) || (last && w == l)
+                    };
+                    assert!(
+                        inside(wx, x0, x1, lx, o / nz == nx - 1)
+                            && inside(wz, z0, z1, lz, o % nz == nz - 1),
+                        "{nx} x {nz}: {p:?} owned by {o}, extent {:?}",
+                        b.extent(o)
+                    );
+                }
+            }
+        }
+    }
 }

@@ -63,6 +63,37 @@ pub trait Transport {
     /// [`Transport::exchange`] of numbers whose counts the receiver knows (`expect[r]` from
     /// rank r): the per-step messages, sent as they are (one `MPI_Alltoallv`, no encoding).
     fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>>;
+    /// What this rank's calls have carried so far, where the transport counts it (MPI);
+    /// None where it does not (bricks as threads move values without encoding them).
+    fn traffic(&self) -> Option<Traffic> {
+        None
+    }
+}
+
+/// What one rank's exchanges carried: what `verify bench` reports of a decomposed run and
+/// the scaling model is fitted to (docs/mpi.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Traffic {
+    /// Exchanges (each one collective call, or two for [`Transport::exchange`]).
+    pub calls: u64,
+    /// Messages this rank sent to other ranks (non-empty ones).
+    pub messages: u64,
+    /// Bytes this rank sent to other ranks.
+    pub bytes: u64,
+    /// Wall time inside the exchanges [s]: the transfers, and the waits for the slowest rank.
+    pub seconds: f64,
+}
+
+impl Traffic {
+    /// What was carried since `earlier`.
+    pub fn since(&self, earlier: &Traffic) -> Traffic {
+        Traffic {
+            calls: self.calls - earlier.calls,
+            messages: self.messages - earlier.messages,
+            bytes: self.bytes - earlier.bytes,
+            seconds: self.seconds - earlier.seconds,
+        }
+    }
 }
 
 /// Every rank's `mine`, by rank.
@@ -146,6 +177,103 @@ impl Transport for InProcess {
         assert_eq!(lengths, expect, "messages of the lengths expected");
         got
     }
+}
+
+/// The link between the ranks as [`Transport::exchange_f64`] sees it (what the scaling
+/// model of `verify bench` is given, docs/mpi.md).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Link {
+    pub ranks: usize,
+    /// Time per message of an exchange of one number with every other rank [s].
+    pub latency_s: f64,
+    /// Extra time per byte sent to another rank, in an exchange of 1 MiB with each [s].
+    pub seconds_per_byte: f64,
+}
+
+/// Measures the [`Link`]: 2,000 exchanges of one number with every rank, then 20 of 1 MiB
+/// with every rank, each after one untimed exchange. Every rank calls it; each measures its
+/// own.
+pub fn probe_link(t: &impl Transport) -> Link {
+    let others = t.size().saturating_sub(1).max(1) as f64;
+    let per_call = |len: usize, calls: usize| {
+        let expect = vec![len; t.size()];
+        let go = || t.exchange_f64(vec![vec![0.0; len]; t.size()], &expect);
+        go();
+        let t0 = std::time::Instant::now();
+        for _ in 0..calls {
+            go();
+        }
+        t0.elapsed().as_secs_f64() / calls as f64
+    };
+    let small = per_call(1, 2000);
+    let big_len = 1 << 17;
+    let big = per_call(big_len, 20);
+    Link {
+        ranks: t.size(),
+        latency_s: small / others,
+        seconds_per_byte: ((big - small) / (8.0 * big_len as f64 * others)).max(0.0),
+    }
+}
+
+/// What a split of the state `s` (as its last rebuild left it) gives each brick: own
+/// particles, ghosts, pairs with an own member (a pair across two bricks is computed by
+/// both) and own particles with plate candidates. What the scaling model predicts from.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Census {
+    pub own: Vec<usize>,
+    pub ghosts: Vec<usize>,
+    pub pairs: Vec<usize>,
+    pub plate: Vec<usize>,
+}
+
+/// The [`Census`] of `s` split into `bricks`, by the rule the bricks are made by
+/// ([`Brick::of`]: ownership and ghosts from `xhold`, the cut `2 r_max + skin`).
+pub fn census(s: &ShearSim, bricks: Bricks) -> Census {
+    let rmax = s.radius.iter().cloned().fold(0.0, f64::max);
+    let cut = 2.0 * rmax + s.skin;
+    let n = bricks.count();
+    let owner: Vec<usize> = s.xhold.iter().map(|&p| bricks.owner(p)).collect();
+    let mut c = Census {
+        own: vec![0; n],
+        ghosts: vec![0; n],
+        pairs: vec![0; n],
+        plate: vec![0; n],
+    };
+    for b in 0..n {
+        let (ids, own) = bricks.members(b, &s.xhold, cut);
+        c.own[b] = own.iter().filter(|&&o| o).count();
+        c.ghosts[b] = ids.len() - c.own[b];
+    }
+    for p in &s.nl.pairs {
+        let (oi, oj) = (owner[p.i as usize], owner[p.j as usize]);
+        c.pairs[oi] += 1;
+        if oj != oi {
+            c.pairs[oj] += 1;
+        }
+    }
+    for (q, &o) in owner.iter().enumerate() {
+        if s.wall_start[q] != s.wall_start[q + 1] {
+            c.plate[o] += 1;
+        }
+    }
+    c
+}
+
+/// The [`Census`] of `s` split as `ranks` ranks split it ([`split_for`]), for each count
+/// whose bricks are wider than the ghost cut; the counts left out (narrower bricks).
+pub fn censuses(s: &ShearSim, ranks: &[usize]) -> (Vec<(Bricks, Census)>, Vec<usize>) {
+    let rmax = s.radius.iter().cloned().fold(0.0, f64::max);
+    let cut = 2.0 * rmax + s.skin;
+    let (mut splits, mut thin) = (Vec::new(), Vec::new());
+    for &r in ranks {
+        let b = split_for(r, s.box_.lx, s.box_.lz);
+        if b.lx / b.nx as f64 <= cut || b.lz / b.nz as f64 <= cut {
+            thin.push(r);
+        } else {
+            splits.push((b, census(s, b)));
+        }
+    }
+    (splits, thin)
 }
 
 /// A particle moving to another brick: everything it carries from step to step.
@@ -383,6 +511,7 @@ impl Brick {
     pub fn step(&mut self, t: &impl Transport) -> Result<()> {
         let moved = self.sim.drift();
         let moved = self.forward(t, moved);
+        self.sim.lap(|p| &mut p.comm);
         self.sim.move_plates();
         self.sim.lap(|p| &mut p.plates);
         if self.sim.decide_rebuild(moved) {
@@ -393,6 +522,7 @@ impl Brick {
         self.sim.lap(|p| &mut p.neighbor);
         let local = self.sim.forces_of_step();
         let kicked = self.plate_forces(t, local)?;
+        self.sim.lap(|p| &mut p.comm);
         self.sim.finish_step(kicked);
         Ok(())
     }
@@ -768,6 +898,10 @@ pub trait Stepper {
     /// Whether every brick's `ok` is true (collective for bricks): what stops all the bricks
     /// of a run when one of them fails outside a step (writing an output).
     fn all_ok(&mut self, ok: bool) -> bool;
+    /// The state this stepper steps (a brick's own particles and ghosts).
+    fn local(&mut self) -> &mut ShearSim;
+    /// What the transport carried so far (None: one process, or not counted).
+    fn traffic(&self) -> Option<Traffic>;
 }
 
 impl Stepper for ShearSim {
@@ -789,6 +923,14 @@ impl Stepper for ShearSim {
 
     fn all_ok(&mut self, ok: bool) -> bool {
         ok
+    }
+
+    fn local(&mut self) -> &mut ShearSim {
+        self
+    }
+
+    fn traffic(&self) -> Option<Traffic> {
+        None
     }
 }
 
@@ -819,6 +961,14 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
 
     fn all_ok(&mut self, ok: bool) -> bool {
         !any(self.transport, !ok)
+    }
+
+    fn local(&mut self) -> &mut ShearSim {
+        &mut self.brick.sim
+    }
+
+    fn traffic(&self) -> Option<Traffic> {
+        self.transport.traffic()
     }
 }
 
@@ -1003,6 +1153,42 @@ mod tests {
             [(1, 1), (2, 1), (3, 1), (2, 2), (3, 2), (7, 1)]
         );
         assert_eq!(split_for(4, 2.0, 8.0).nz, 4);
+    }
+
+    /// The scaling model's census counts what the bricks hold: for each split, each brick's
+    /// own particles, ghosts, listed pairs and own particles with plate candidates as
+    /// [`Brick::of`] makes it; one brick holds everything, no ghosts.
+    #[test]
+    fn the_census_counts_what_the_bricks_hold() {
+        let (c, dense) = dense();
+        let mut s = ShearSim::new(&c.setup(), &dense);
+        s.setup(c.stages[0].speed).unwrap();
+        for _ in 0..200 {
+            s.step().unwrap();
+        }
+        let (splits, thin) = censuses(&s, &[1, 2, 4, 6, 4096]);
+        assert_eq!(thin, [4096]);
+        assert_eq!(splits.len(), 4);
+        for (bricks, census) in &splits {
+            let r = bricks.count();
+            assert_eq!(census.own.iter().sum::<usize>(), s.particle_count());
+            if r == 1 {
+                assert_eq!(census.ghosts, [0]);
+                assert_eq!(census.pairs, [s.listed_pairs()]);
+            }
+            for b in 0..r {
+                let brick = Brick::of(&s, *bricks, b);
+                let own = brick.sim.ghost.iter().filter(|g| !**g).count();
+                assert_eq!(census.own[b], own, "{r} bricks, brick {b}");
+                assert_eq!(census.ghosts[b], brick.sim.particle_count() - own);
+                assert_eq!(census.pairs[b], brick.sim.listed_pairs());
+                assert_eq!(census.plate[b], own_with_candidates(&brick.sim).len());
+            }
+            if r > 1 {
+                assert!(census.ghosts.iter().all(|&g| g > 0));
+                assert!(census.pairs.iter().sum::<usize>() > s.listed_pairs());
+            }
+        }
     }
 
     fn dense() -> (ShearCase, Packing) {

@@ -249,17 +249,23 @@ pub struct PhaseTimes {
     pub pairs: f64,
     /// Per-particle sums of pair forces and the particle-plate contacts.
     pub sum_walls: f64,
+    /// A decomposed run's exchanges of every step (the ghosts' positions, the plate force
+    /// shares), with the waits for the slowest brick; a rebuild's migration and ghosts are
+    /// in `neighbor`. Zero in one process.
+    #[serde(default)]
+    pub comm: f64,
 }
 
 impl PhaseTimes {
     /// The phases with their names.
-    pub fn named(&self) -> [(&'static str, f64); 5] {
+    pub fn named(&self) -> [(&'static str, f64); 6] {
         [
             ("pair pass", self.pairs),
             ("sums + walls", self.sum_walls),
             ("integration", self.integrate),
             ("neighbour", self.neighbor),
             ("plates", self.plates),
+            ("communication", self.comm),
         ]
     }
 }

@@ -4,27 +4,59 @@
 //! messages, each encoded as MessagePack (every f64 as its 64 bits: the bricks' bits travel
 //! unchanged).
 
-use super::decompose::{Transport, Wire};
+use super::decompose::{Traffic, Transport, Wire};
 use mpi::datatype::{Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::time::Instant;
 
 /// A communicator's ranks as bricks.
 pub struct Mpi {
     world: SimpleCommunicator,
+    meter: Meter,
+}
+
+/// [`Traffic`] counted as it goes (atomics: a handle may be lent to the threads of a pool,
+/// though only one of them calls MPI at a time).
+#[derive(Default)]
+struct Meter {
+    calls: AtomicU64,
+    messages: AtomicU64,
+    bytes: AtomicU64,
+    nanos: AtomicU64,
+}
+
+impl Meter {
+    /// One call that began at `t0` and sent `sizes[r]` bytes to rank r (`me` excluded).
+    fn add(&self, t0: Instant, sizes: impl Iterator<Item = usize>, me: usize) {
+        let (mut messages, mut bytes) = (0, 0);
+        for (r, n) in sizes.enumerate() {
+            if r != me && n > 0 {
+                messages += 1;
+                bytes += n as u64;
+            }
+        }
+        self.calls.fetch_add(1, Relaxed);
+        self.messages.fetch_add(messages, Relaxed);
+        self.bytes.fetch_add(bytes, Relaxed);
+        self.nanos
+            .fetch_add(t0.elapsed().as_nanos() as u64, Relaxed);
+    }
 }
 
 impl Mpi {
     pub fn new(world: SimpleCommunicator) -> Self {
-        Mpi { world }
+        Mpi {
+            world,
+            meter: Meter::default(),
+        }
     }
 
     /// `MPI_COMM_WORLD` (MPI initialised): a handle per thread that calls MPI (a
     /// communicator handle is not shared between threads; the calls are serialised).
     pub fn world() -> Self {
-        Mpi {
-            world: SimpleCommunicator::world(),
-        }
+        Mpi::new(SimpleCommunicator::world())
     }
 }
 
@@ -74,6 +106,7 @@ impl Transport for Mpi {
     }
 
     fn exchange<T: Wire>(&self, out: Vec<T>) -> Vec<T> {
+        let t0 = Instant::now();
         let size = self.size();
         assert_eq!(out.len(), size, "one message per rank");
         // an encoding failure or a message over 2 GiB is a bug of the caller, not an input
@@ -85,6 +118,7 @@ impl Transport for Mpi {
         let mut got_counts = vec![0i32; size];
         self.world.all_to_all_into(&sent[..], &mut got_counts[..]);
         let got = all_to_all(&self.world, &bufs.concat(), &sent, &got_counts);
+        self.meter.add(t0, bufs.iter().map(Vec::len), self.rank());
         let got_at = offsets(&got_counts);
         (0..size)
             .map(|k| {
@@ -96,10 +130,13 @@ impl Transport for Mpi {
     }
 
     fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>> {
+        let t0 = Instant::now();
         assert_eq!(out.len(), self.size(), "one message per rank");
         let sent = counts(out.iter().map(Vec::len));
         let got_counts = counts(expect.iter().copied());
         let got = all_to_all(&self.world, &out.concat(), &sent, &got_counts);
+        self.meter
+            .add(t0, out.iter().map(|m| 8 * m.len()), self.rank());
         let mut at = 0;
         expect
             .iter()
@@ -108,5 +145,15 @@ impl Transport for Mpi {
                 got[at - n..at].to_vec()
             })
             .collect()
+    }
+
+    fn traffic(&self) -> Option<Traffic> {
+        let m = &self.meter;
+        Some(Traffic {
+            calls: m.calls.load(Relaxed),
+            messages: m.messages.load(Relaxed),
+            bytes: m.bytes.load(Relaxed),
+            seconds: m.nanos.load(Relaxed) as f64 * 1e-9,
+        })
     }
 }

@@ -124,6 +124,16 @@ impl ShearSim {
         &self.f
     }
 
+    /// Particles held (a brick's own and ghosts).
+    pub fn particle_count(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Pairs in the neighbour list.
+    pub fn listed_pairs(&self) -> usize {
+        self.nl.pairs.len()
+    }
+
     /// (listed pairs, touching pairs, particle-plate contacts) at the last force evaluation.
     pub fn contact_counts(&self) -> (usize, usize, usize) {
         let touching = self

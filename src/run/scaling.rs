@@ -1,0 +1,262 @@
+//! The scaling model of a decomposed run (issue #39, docs/mpi.md): what `verify bench`
+//! predicts for rank counts this machine cannot run, from what it measured.
+//!
+//! The time of one step on R ranks is the slowest brick's:
+//!
+//! ```text
+//! T(R) = max_b [ t_pair P_b + t_part (N_b + G_b) ] + alpha M_b + beta_inv B_b
+//! ```
+//!
+//! - `P_b` pairs with an own member (a pair across two bricks is computed by both), `N_b` own
+//!   particles, `G_b` ghosts (drifted, listed and sent like own ones): the [`Census`] of the
+//!   bench's dense state split as the bricks split it;
+//! - `t_pair`, `t_part`: the costs per pair (pair pass, sums and walls) and per particle
+//!   (integration, neighbour lists, plates) of the 1-rank run of the same bench, from its
+//!   phase times (by construction they give back its time per step);
+//! - `M_b` messages per step, `B_b` bytes per step a brick receives: every step two
+//!   exchanges (the ghosts' positions, 72 bytes per ghost; the plate force shares, 48 bytes
+//!   per particle with plate candidates, of every brick), and a rebuild's seven exchanges
+//!   amortised over the measured steps between rebuilds;
+//! - `alpha` (latency per message) and `beta_inv` (time per byte): this machine's, measured
+//!   by the bench's link probe under `mpirun` ([`Link`]), or a cluster's, assumed.
+//!
+//! As built, each exchange is an all-to-all in which every message carries a flag, so each
+//! brick sends R - 1 messages per exchange: the latency term grows with R. The model also
+//! gives the design that removes it (ghosts sent to neighbouring bricks only, the flags by an
+//! all-reduce, the plate shares by an all-gather: about `neighbours + 3 log2 R` messages per
+//! step), so the figure says what that change would buy before it is made.
+
+use crate::solver::shear::decompose::{censuses, Census, Link};
+use crate::solver::shear::{PhaseTimes, ShearSim};
+use serde::{Deserialize, Serialize};
+
+/// A cluster's link, assumed (not measured here): an InfiniBand HDR-class network, 1.5 us
+/// per message and 10 GB/s.
+pub const CLUSTER: Link = Link {
+    ranks: 0,
+    latency_s: 1.5e-6,
+    seconds_per_byte: 1.0e-10,
+};
+
+/// Exchanges of a rebuild: the divergence check, the migration, the ghosts and the plate
+/// plan (each two collective calls: sizes, then the messages) ([`crate::solver::shear::decompose`]).
+const REBUILD_EXCHANGES: f64 = 7.0;
+
+/// Bytes per ghost sent every step: position, velocity, angular velocity.
+const GHOST_BYTES: f64 = 72.0;
+/// Bytes per particle with plate candidates sent every step: its bottom and top plate forces.
+const PLATE_BYTES: f64 = 48.0;
+
+/// The costs a 1-rank run measured.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Costs {
+    /// Seconds per listed pair per step (pair pass, sums, walls).
+    pub per_pair_s: f64,
+    /// Seconds per particle per step (integration, neighbour lists, plates).
+    pub per_particle_s: f64,
+    /// Steps between neighbour rebuilds.
+    pub steps_per_rebuild: f64,
+}
+
+impl Costs {
+    /// From a 1-rank run's phases over `pairs` listed pairs and `particles` particles.
+    pub fn of(p: &PhaseTimes, pairs: usize, particles: usize, rebuilds: u64) -> Option<Costs> {
+        if p.steps == 0 || pairs == 0 || particles == 0 {
+            return None;
+        }
+        let per_step = |s: f64| s / p.steps as f64;
+        Some(Costs {
+            per_pair_s: per_step(p.pairs + p.sum_walls) / pairs as f64,
+            per_particle_s: per_step(p.integrate + p.neighbor + p.plates) / particles as f64,
+            steps_per_rebuild: p.steps as f64 / rebuilds.max(1) as f64,
+        })
+    }
+}
+
+/// One rank count's prediction.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScalePoint {
+    pub ranks: usize,
+    pub bricks: (usize, usize),
+    /// Own particles of the fullest brick.
+    pub particles_per_rank: usize,
+    /// Ghosts over own particles, the brick with the most ghosts.
+    pub ghost_fraction: f64,
+    /// The slowest brick's pairs over the mean share of one process's pairs (1: no overhead).
+    pub pair_overhead: f64,
+    /// Bytes a brick receives per step (the most of any).
+    pub bytes_per_step: f64,
+    /// Messages a brick sends per step as built, and with neighbour-only messages.
+    pub messages_built: f64,
+    pub messages_neighbour: f64,
+    /// Compute time per step of the slowest brick [s].
+    pub compute_s: f64,
+    /// Predicted time per step [s]: as built and with neighbour-only messages, on this
+    /// machine's link (None without a probe) and on [`CLUSTER`]'s.
+    pub here_built_s: Option<f64>,
+    pub cluster_built_s: f64,
+    pub cluster_neighbour_s: f64,
+}
+
+/// The model's predictions and its check against what this machine ran.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scaling {
+    pub particles: usize,
+    pub costs: Costs,
+    pub link: Option<Link>,
+    pub cluster: Link,
+    /// One process's time per step [s] (the model's, equal to the 1-rank run's).
+    pub one_rank_s: f64,
+    pub points: Vec<ScalePoint>,
+    /// Rank counts left out: bricks narrower than the ghost cut.
+    pub too_thin: Vec<usize>,
+}
+
+/// The model over `ranks` for the state `s` (one process's, as its last rebuild left it).
+pub fn model(s: &ShearSim, costs: Costs, link: Option<Link>, ranks: &[usize]) -> Scaling {
+    let (n, pairs_total) = (s.particle_count(), s.listed_pairs());
+    let (splits, too_thin) = censuses(s, ranks);
+    let points = splits
+        .iter()
+        .map(|(bricks, c)| point(c, bricks.nx, bricks.nz, costs, link, pairs_total))
+        .collect();
+    Scaling {
+        particles: n,
+        costs,
+        link,
+        cluster: CLUSTER,
+        one_rank_s: costs.per_pair_s * pairs_total as f64 + costs.per_particle_s * n as f64,
+        points,
+        too_thin,
+    }
+}
+
+fn point(
+    c: &Census,
+    nx: usize,
+    nz: usize,
+    k: Costs,
+    link: Option<Link>,
+    pairs_total: usize,
+) -> ScalePoint {
+    let r = c.own.len();
+    let others = (r - 1) as f64;
+    let plate_total: usize = c.plate.iter().sum();
+    // a lone brick exchanges nothing
+    let exchanges = if r == 1 {
+        0.0
+    } else {
+        2.0 + 2.0 * REBUILD_EXCHANGES / k.steps_per_rebuild
+    };
+    let messages_built = exchanges * others;
+    let neighbours = if r == 1 {
+        0.0
+    } else {
+        // a brick's neighbours in a split of nx x nz (fewer where a side has one or two bricks)
+        let side = |n: usize| (n.min(3) - 1) as f64;
+        (side(nx) + 1.0) * (side(nz) + 1.0) - 1.0
+    };
+    let messages_neighbour = if r == 1 {
+        0.0
+    } else {
+        neighbours
+            + 3.0 * (r as f64).log2()
+            + 2.0 * REBUILD_EXCHANGES / k.steps_per_rebuild * others
+    };
+    // each brick's compute time and bytes received per step
+    let per_brick: Vec<(f64, f64)> = (0..r)
+        .map(|b| {
+            let compute = k.per_pair_s * c.pairs[b] as f64
+                + k.per_particle_s * (c.own[b] + c.ghosts[b]) as f64;
+            let bytes = if r == 1 {
+                0.0
+            } else {
+                GHOST_BYTES * c.ghosts[b] as f64 + PLATE_BYTES * (plate_total - c.plate[b]) as f64
+            };
+            (compute, bytes)
+        })
+        .collect();
+    let slowest = |l: &Link, messages: f64| {
+        per_brick
+            .iter()
+            .map(|(t, bytes)| t + l.latency_s * messages + l.seconds_per_byte * bytes)
+            .fold(0.0, f64::max)
+    };
+    let compute_s = per_brick.iter().map(|b| b.0).fold(0.0, f64::max);
+    let bytes_per_step = per_brick.iter().map(|b| b.1).fold(0.0, f64::max);
+    let most = |v: &[usize]| v.iter().copied().max().unwrap_or(0);
+    let ghost_fraction = (0..r)
+        .map(|b| c.ghosts[b] as f64 / c.own[b].max(1) as f64)
+        .fold(0.0, f64::max);
+    ScalePoint {
+        ranks: r,
+        bricks: (nx, nz),
+        particles_per_rank: most(&c.own),
+        ghost_fraction,
+        pair_overhead: most(&c.pairs) as f64 / (pairs_total as f64 / r as f64),
+        bytes_per_step,
+        messages_built,
+        messages_neighbour,
+        compute_s,
+        here_built_s: link.map(|l| slowest(&l, messages_built)),
+        cluster_built_s: slowest(&CLUSTER, messages_built),
+        cluster_neighbour_s: slowest(&CLUSTER, messages_neighbour),
+    }
+}
+
+/// The table `verify bench` prints.
+pub fn table(s: &Scaling) -> Vec<String> {
+    let mut out = vec![format!(
+        "  scaling model ({} particles; {:.1} ns per pair, {:.1} ns per particle, a rebuild every \
+         {:.0} steps; link here {}; cluster assumed {:.1} us per message, {:.0} GB/s):",
+        s.particles,
+        s.costs.per_pair_s * 1e9,
+        s.costs.per_particle_s * 1e9,
+        s.costs.steps_per_rebuild,
+        s.link
+            .map(|l| format!(
+                "{:.2} us per message, {:.1} GB/s (measured, {} ranks)",
+                l.latency_s * 1e6,
+                1e-9 / l.seconds_per_byte.max(1e-15),
+                l.ranks
+            ))
+            .unwrap_or_else(|| "not measured (no ranks run)".into()),
+        s.cluster.latency_s * 1e6,
+        1e-9 / s.cluster.seconds_per_byte
+    )];
+    out.push(
+        "    ranks  bricks  particles/rank  ghosts/own  pair overhead  kB/step  msgs/step  \
+         speedup here  cluster as built  cluster neighbour-only"
+            .into(),
+    );
+    for p in &s.points {
+        let speed = |t: f64| {
+            format!(
+                "{:.1}x ({:.0} %)",
+                s.one_rank_s / t,
+                100.0 * s.one_rank_s / t / p.ranks as f64
+            )
+        };
+        out.push(format!(
+            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.0}  {:>12}  {:>16}  {:>22}",
+            p.ranks,
+            p.bricks.0,
+            p.bricks.1,
+            p.particles_per_rank,
+            p.ghost_fraction,
+            p.pair_overhead,
+            p.bytes_per_step / 1e3,
+            p.messages_built,
+            p.here_built_s.map(speed).unwrap_or_else(|| "-".into()),
+            speed(p.cluster_built_s),
+            speed(p.cluster_neighbour_s),
+        ));
+    }
+    if !s.too_thin.is_empty() {
+        out.push(format!(
+            "    not modelled (bricks narrower than the ghost cut): {:?} ranks",
+            s.too_thin
+        ));
+    }
+    out
+}
