@@ -186,18 +186,27 @@ pub struct Link {
     pub ranks: usize,
     /// Time per message of an exchange of one number with every other rank [s].
     pub latency_s: f64,
-    /// Extra time per byte sent to another rank, in an exchange of 1 MiB with each [s].
+    /// Extra time per byte sent to another rank, in an exchange of 32 KiB with each [s].
     pub seconds_per_byte: f64,
 }
 
-/// Measures the [`Link`]: 2,000 exchanges of one number with every rank, then 20 of 1 MiB
-/// with every rank, each after one untimed exchange. Every rank calls it; each measures its
-/// own.
+/// Measures the [`Link`]: 2,000 exchanges of one number with every other rank, then 500 of
+/// 32 KiB with every other rank (the size of a step's ghost message at about 10^3 particles
+/// per brick; nothing to itself, as in a step), each after one untimed exchange. Every rank
+/// calls it; each measures its own. Measured on the 2-core VM of 2026-12-05 (2 ranks): 0.6
+/// us for one number, 0.6-1.0 GB/s from 4 to 32 KiB, 0.5 GB/s at 64 KiB and above: the
+/// size matters, so the probe uses the size a step sends.
 pub fn probe_link(t: &impl Transport) -> Link {
     let others = t.size().saturating_sub(1).max(1) as f64;
     let per_call = |len: usize, calls: usize| {
-        let expect = vec![len; t.size()];
-        let go = || t.exchange_f64(vec![vec![0.0; len]; t.size()], &expect);
+        let mut expect = vec![len; t.size()];
+        expect[t.rank()] = 0;
+        let out = || {
+            let mut out = vec![vec![0.5; len]; t.size()];
+            out[t.rank()] = Vec::new();
+            out
+        };
+        let go = || t.exchange_f64(out(), &expect);
         go();
         let t0 = std::time::Instant::now();
         for _ in 0..calls {
@@ -206,8 +215,8 @@ pub fn probe_link(t: &impl Transport) -> Link {
         t0.elapsed().as_secs_f64() / calls as f64
     };
     let small = per_call(1, 2000);
-    let big_len = 1 << 17;
-    let big = per_call(big_len, 20);
+    let big_len = 1 << 12;
+    let big = per_call(big_len, 500);
     Link {
         ranks: t.size(),
         latency_s: small / others,
@@ -522,7 +531,6 @@ impl Brick {
         self.sim.lap(|p| &mut p.neighbor);
         let local = self.sim.forces_of_step();
         let kicked = self.plate_forces(t, local)?;
-        self.sim.lap(|p| &mut p.comm);
         self.sim.finish_step(kicked);
         Ok(())
     }
@@ -581,6 +589,7 @@ impl Brick {
         }
         let expect: Vec<usize> = self.plates.counts.iter().map(|c| 1 + 6 * c).collect();
         let got = t.exchange_f64(vec![share; t.size()], &expect);
+        self.sim.lap(|p| &mut p.comm);
         if got.iter().any(|g| g[0] != 0.0) {
             // rare: say why, every brick
             let said = all_gather(t, local.as_ref().err().map(|e| e.to_string()));
