@@ -24,7 +24,9 @@
 //! brick sends R - 1 messages per exchange: the latency term grows with R. The model also
 //! gives the design that removes it (ghosts sent to neighbouring bricks only, the flags by an
 //! all-reduce, the plate shares by an all-gather: about `neighbours + 3 log2 R` messages per
-//! step), so the figure says what that change would buy before it is made.
+//! step), and beyond it the plate forces summed exactly (an order-independent accumulator of
+//! a few kB per rank, all-reduced: the bytes of the plate shares, which every brick receives
+//! whole, gone), so the figure says what each change would buy before it is made.
 
 use crate::solver::shear::decompose::{censuses, Census, Link};
 use crate::solver::shear::{PhaseTimes, ShearSim};
@@ -46,6 +48,9 @@ const REBUILD_EXCHANGES: f64 = 7.0;
 const GHOST_BYTES: f64 = 72.0;
 /// Bytes per particle with plate candidates sent every step: its bottom and top plate forces.
 const PLATE_BYTES: f64 = 48.0;
+/// Bytes of an exact (order-independent) accumulator of the 6 plate force components, per
+/// step of an all-reduce (a 2,100-bit fixed point per component).
+const EXACT_SUM_BYTES: f64 = 6.0 * 264.0;
 
 /// The costs a 1-rank run measured.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -96,6 +101,9 @@ pub struct ScalePoint {
     pub here_built_s: Option<f64>,
     pub cluster_built_s: f64,
     pub cluster_neighbour_s: f64,
+    /// With neighbour-only messages and the plate forces summed exactly (an all-reduce of
+    /// accumulators), on [`CLUSTER`]'s link.
+    pub cluster_exact_s: f64,
 }
 
 /// The model's predictions and its check against what this machine ran.
@@ -163,25 +171,30 @@ fn point(
             + 3.0 * (r as f64).log2()
             + 2.0 * REBUILD_EXCHANGES / k.steps_per_rebuild * others
     };
-    // each brick's compute time and bytes received per step
-    let per_brick: Vec<(f64, f64)> = (0..r)
+    // each brick's compute time, and bytes received per step as built and with the exact sum
+    let per_brick: Vec<(f64, f64, f64)> = (0..r)
         .map(|b| {
             let compute = k.per_pair_s * c.pairs[b] as f64
                 + k.per_particle_s * (c.own[b] + c.ghosts[b]) as f64;
-            let bytes = if r == 1 {
-                0.0
-            } else {
-                GHOST_BYTES * c.ghosts[b] as f64 + PLATE_BYTES * (plate_total - c.plate[b]) as f64
-            };
-            (compute, bytes)
+            if r == 1 {
+                return (compute, 0.0, 0.0);
+            }
+            let ghosts = GHOST_BYTES * c.ghosts[b] as f64;
+            let shares = PLATE_BYTES * (plate_total - c.plate[b]) as f64;
+            let exact = EXACT_SUM_BYTES * (r as f64).log2();
+            (compute, ghosts + shares, ghosts + exact)
         })
         .collect();
-    let slowest = |l: &Link, messages: f64| {
+    let slowest_of = |l: &Link, messages: f64, exact: bool| {
         per_brick
             .iter()
-            .map(|(t, bytes)| t + l.latency_s * messages + l.seconds_per_byte * bytes)
+            .map(|&(t, built, with_exact)| {
+                let bytes = if exact { with_exact } else { built };
+                t + l.latency_s * messages + l.seconds_per_byte * bytes
+            })
             .fold(0.0, f64::max)
     };
+    let slowest = |l: &Link, messages: f64| slowest_of(l, messages, false);
     let compute_s = per_brick.iter().map(|b| b.0).fold(0.0, f64::max);
     let bytes_per_step = per_brick.iter().map(|b| b.1).fold(0.0, f64::max);
     let most = |v: &[usize]| v.iter().copied().max().unwrap_or(0);
@@ -201,6 +214,7 @@ fn point(
         here_built_s: link.map(|l| slowest(&l, messages_built)),
         cluster_built_s: slowest(&CLUSTER, messages_built),
         cluster_neighbour_s: slowest(&CLUSTER, messages_neighbour),
+        cluster_exact_s: slowest_of(&CLUSTER, messages_neighbour, true),
     }
 }
 
@@ -226,7 +240,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
     )];
     out.push(
         "    ranks  bricks  particles/rank  ghosts/own  pair overhead  kB/step  msgs/step  \
-         speedup here  cluster as built  cluster neighbour-only"
+         speedup here  cluster as built  cluster neighbour-only  + exact plate sum"
             .into(),
     );
     for p in &s.points {
@@ -238,7 +252,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
             )
         };
         out.push(format!(
-            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.0}  {:>12}  {:>16}  {:>22}",
+            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.0}  {:>12}  {:>16}  {:>22}  {:>17}",
             p.ranks,
             p.bricks.0,
             p.bricks.1,
@@ -250,6 +264,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
             p.here_built_s.map(speed).unwrap_or_else(|| "-".into()),
             speed(p.cluster_built_s),
             speed(p.cluster_neighbour_s),
+            speed(p.cluster_exact_s),
         ));
     }
     if !s.too_thin.is_empty() {
@@ -259,4 +274,58 @@ pub fn table(s: &Scaling) -> Vec<String> {
         ));
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::packing::loose_packing;
+    use crate::solver::shear::compact;
+    use crate::spec::shear::{Preset, ShearCase};
+    use crate::spec::RollingModel;
+
+    /// The costs give back the 1-rank run's time per step; one brick exchanges nothing and
+    /// takes that time; two bricks exchange as built (two exchanges a step, the rebuild's
+    /// amortised, each a message to the other brick) and receive the ghosts' and the other
+    /// brick's plate shares' bytes; the exact plate sum removes the shares' bytes.
+    #[test]
+    fn the_model_gives_back_what_it_was_fitted_to() {
+        let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+        let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
+        let mut s = ShearSim::new(&c.setup(), &dense);
+        s.setup(c.stages[0].speed).unwrap();
+        s.time_phases(true);
+        for _ in 0..300 {
+            s.step().unwrap();
+        }
+        let p = s.phase_times().unwrap();
+        let (n, pairs) = (s.particle_count(), s.listed_pairs());
+        let k = Costs::of(&p, pairs, n, 3).unwrap();
+        assert_eq!(k.steps_per_rebuild, 100.0);
+        let per_step = (p.pairs + p.sum_walls + p.integrate + p.neighbor + p.plates) / 300.0;
+        let link = Link {
+            ranks: 2,
+            latency_s: 1e-6,
+            seconds_per_byte: 1e-9,
+        };
+        let m = model(&s, k, Some(link), &[1, 2]);
+        assert!((m.one_rank_s / per_step - 1.0).abs() < 1e-9);
+        let (one, two) = (&m.points[0], &m.points[1]);
+        assert_eq!((one.messages_built, one.bytes_per_step), (0.0, 0.0));
+        assert!((one.here_built_s.unwrap() / m.one_rank_s - 1.0).abs() < 1e-9);
+        assert_eq!(two.messages_built, 2.0 + 2.0 * REBUILD_EXCHANGES / 100.0);
+        let (splits, _) = censuses(&s, &[2]);
+        let cen = &splits[0].1;
+        let plate: usize = cen.plate.iter().sum();
+        let bytes = (0..2)
+            .map(|b| {
+                GHOST_BYTES * cen.ghosts[b] as f64 + PLATE_BYTES * (plate - cen.plate[b]) as f64
+            })
+            .fold(0.0, f64::max);
+        assert_eq!(two.bytes_per_step, bytes);
+        assert!(two.compute_s < m.one_rank_s && two.compute_s > 0.5 * m.one_rank_s);
+        // the same messages, the shares' bytes (more than an accumulator's) gone
+        assert!(plate > 100, "{plate} particles with plate candidates");
+        assert!(two.cluster_exact_s < two.cluster_neighbour_s);
+    }
 }
