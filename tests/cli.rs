@@ -139,6 +139,36 @@ fn a_bench_over_ranks_needs_the_mpi_feature() {
     assert!(!out.join("bench.json").exists());
 }
 
+/// `verify sweep --emit slurm --ranks-per-run 2` in a build without the `mpi` feature: an
+/// error naming the field and the feature, and no script.
+#[cfg(not(feature = "mpi"))]
+#[test]
+fn a_sweep_over_ranks_needs_the_mpi_feature() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s");
+    let o = std::process::Command::new(common::verify_bin())
+        .args([
+            "sweep",
+            "--preset",
+            "ci",
+            "--emit",
+            "slurm",
+            "--ranks-per-run",
+            "2",
+        ])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let e = stderr(&o);
+    assert!(
+        e.contains("`--ranks-per-run`") && e.contains("--features mpi"),
+        "{e}"
+    );
+    assert!(!out.join("sweep.sbatch").exists());
+}
+
 #[test]
 fn reference_mode_needs_no_liggghts() {
     let dir = tempfile::tempdir().unwrap();

@@ -221,3 +221,71 @@ fn the_bench_measures_two_ranks_beside_one() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o));
     assert!(text(&o).contains("`--native-only`"), "{}", text(&o));
 }
+
+/// Stops the local SLURM however the test ends.
+struct Slurm(std::path::PathBuf);
+
+impl Drop for Slurm {
+    fn drop(&mut self) {
+        let _ = Command::new("bash")
+            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
+            .arg("stop")
+            .arg(&self.0)
+            .status();
+    }
+}
+
+/// A sweep's SLURM array with `--ranks-per-run 2`: each run one simulation over the 2 MPI
+/// tasks `srun` starts, its series byte for byte the local one-process run's (issue #39).
+#[test]
+fn a_slurm_sweep_runs_each_run_over_two_ranks_to_one_process_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let sweep = |out: &Path, more: &[&str]| {
+        let mut a = vec![
+            "sweep", "--preset", "ci", "--points", "0.5:0.5", "--seeds", "1", "--engine", "native",
+            "--strain", "0.1", "--out",
+        ];
+        a.push(out.to_str().unwrap());
+        a.extend_from_slice(more);
+        verify(&a)
+    };
+    let local = dir.path().join("local");
+    ran(&sweep(&local, &["--threads", "1"]), "the local sweep");
+    let state = dir.path().join("slurm");
+    let start = Command::new("bash")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
+        .arg("start")
+        .arg(&state)
+        .output()
+        .unwrap();
+    let _guard = Slurm(state);
+    ran(
+        &start,
+        "a local SLURM (CI installs slurmctld, slurmd, munge)",
+    );
+    let cluster = dir.path().join("cluster");
+    ran(
+        &sweep(&cluster, &["--emit", "slurm", "--ranks-per-run", "2"]),
+        "the SLURM script",
+    );
+    let script = std::fs::read_to_string(cluster.join("sweep.sbatch")).unwrap();
+    assert!(
+        script.contains("#SBATCH --ntasks=2") && script.contains("exec srun --mpi=pmix "),
+        "{script}"
+    );
+    let sb = Command::new("sbatch")
+        .arg("--wait")
+        .arg(cluster.join("sweep.sbatch"))
+        .output()
+        .unwrap();
+    ran(&sb, "sbatch");
+    let log = std::fs::read_to_string(cluster.join("logs/run-0.log")).unwrap();
+    assert!(log.contains("decomposed over 2 MPI ranks"), "{log}");
+    let series = |d: &Path| {
+        let p = d.join("runs/mur0.5_etar0.5_s1/seed1/native.csv");
+        std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+    };
+    let (a, b) = (series(&local), series(&cluster));
+    assert!(a.len() > 1000);
+    assert!(a == b, "the 2-rank run's series differs from one process's");
+}

@@ -355,6 +355,10 @@ fn sweep_refuses_bad_input() {
             "[possible values: native, liggghts, both]",
         ),
         (vec!["--jobs", "0"], "--jobs"),
+        (
+            vec!["--emit", "slurm", "--ranks-per-run", "0"],
+            "--ranks-per-run",
+        ),
         (vec!["--emit", "pbs"], "[possible values: slurm]"),
         (
             vec!["--preset", "huge"],

@@ -91,6 +91,10 @@ pub struct PlanArgs {
     /// Write a scheduler script for the manifest instead of running: `slurm`.
     #[arg(long, value_enum)]
     pub emit: Option<Scheduler>,
+    /// With `--emit slurm`: MPI ranks of each run (`srun`; a verify built with the `mpi`
+    /// feature), 1 ..= 1024.
+    #[arg(long, default_value_t = 1, requires = "emit")]
+    pub ranks_per_run: usize,
 }
 
 /// Schedulers a sweep can emit a script for.
@@ -198,6 +202,20 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
         .out
         .clone()
         .ok_or_else(|| Error::invalid("--out", "(missing)", "the sweep directory (required)"))?;
+    if !(1..=1024).contains(&p.ranks_per_run) {
+        return Err(Error::invalid(
+            "--ranks-per-run",
+            p.ranks_per_run,
+            "1 ..= 1024",
+        ));
+    }
+    if p.ranks_per_run > 1 && !cfg!(feature = "mpi") {
+        return Err(Error::invalid(
+            "--ranks-per-run",
+            p.ranks_per_run,
+            "1 in a build without MPI (install with `cargo install --path . --features mpi`)",
+        ));
+    }
     let req = p.request(out.clone());
     let m = plan(&req)?;
     let mpath = out.join("manifest.json");
@@ -217,7 +235,7 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
     );
     if p.emit == Some(Scheduler::Slurm) {
         let exe = std::env::current_exe().map_err(|e| Error::io("verify binary", e))?;
-        let script = slurm_script(&m, &out, &exe)?;
+        let script = slurm_script(&m, &out, &exe, p.ranks_per_run)?;
         std::fs::create_dir_all(out.join("logs")).map_err(|e| Error::io(&out, e))?;
         write_atomic(&out.join("sweep.sbatch"), script.as_bytes())?;
         println!(

@@ -448,21 +448,31 @@ fn shell_path(p: &Path) -> Result<String> {
     Ok(format!("'{s}'"))
 }
 
-/// The SLURM job-array script of a manifest.
-pub fn slurm_script(m: &Manifest, dir: &Path, verify: &Path) -> Result<String> {
+/// The SLURM job-array script of a manifest: one array task per run; with `ranks` > 1 each
+/// run is one simulation decomposed over `ranks` MPI tasks started by `srun` (OpenMPI's
+/// PMIx, as Debian's SLURM builds it: `srun --mpi=pmix`), rank 0 writing its files (issue
+/// #39, `crate::ranks`), the binary built with the `mpi` feature.
+pub fn slurm_script(m: &Manifest, dir: &Path, verify: &Path, ranks: usize) -> Result<String> {
     let cores = m.base.engine.cores();
     let dir = std::path::absolute(dir).map_err(|e| Error::io(dir, e))?;
+    let (each, launch) = match ranks {
+        1 => (String::new(), ""),
+        r => (
+            format!(" Each run over {r} MPI ranks (srun)."),
+            "srun --mpi=pmix ",
+        ),
+    };
     Ok(format!(
         "#!/bin/bash\n\
-         # DEM sweep: {n} runs ({preset} preset, {rolling}, engine {engine:?}), one array task each.\n\
+         # DEM sweep: {n} runs ({preset} preset, {rolling}, engine {engine:?}), one array task each.{each}\n\
          # Submit: sbatch {script}; then: verify sweep collect {d}; verify sweep report {d}\n\
          #SBATCH --job-name=dem-sweep\n\
          #SBATCH --array=0-{last}\n\
-         #SBATCH --ntasks=1\n\
+         #SBATCH --ntasks={ranks}\n\
          #SBATCH --cpus-per-task={cores}\n\
          #SBATCH --output={logs}/run-%a.log\n\
          set -euo pipefail\n\
-         exec {verify} sweep run-one --manifest {manifest} --index \"$SLURM_ARRAY_TASK_ID\" --threads 1\n",
+         exec {launch}{verify} sweep run-one --manifest {manifest} --index \"$SLURM_ARRAY_TASK_ID\" --threads 1\n",
         n = m.runs.len(),
         preset = m.base.preset,
         rolling = m.base.rolling,
