@@ -118,55 +118,44 @@ fn a_build_without_mpi_refuses_to_run_as_several_ranks() {
     assert!(!dir.path().join("out").exists(), "it ran anyway");
 }
 
-/// `verify bench --ranks 2` in a build without the `mpi` feature: an error naming the
-/// field and the feature, before any work.
+/// `verify bench --ranks 2` and `verify sweep --emit slurm --ranks-per-run 2` in a build
+/// without the `mpi` feature: an error naming the field and the feature, before any work.
 #[cfg(not(feature = "mpi"))]
 #[test]
-fn a_bench_over_ranks_needs_the_mpi_feature() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("b");
-    let o = std::process::Command::new(common::verify_bin())
-        .args(["bench", "--native-only", "--ranks", "1,2", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    let e = stderr(&o);
-    assert!(
-        e.contains("`--ranks`") && e.contains("--features mpi"),
-        "{e}"
-    );
-    assert!(!out.join("bench.json").exists());
-}
-
-/// `verify sweep --emit slurm --ranks-per-run 2` in a build without the `mpi` feature: an
-/// error naming the field and the feature, and no script.
-#[cfg(not(feature = "mpi"))]
-#[test]
-fn a_sweep_over_ranks_needs_the_mpi_feature() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("s");
-    let o = std::process::Command::new(common::verify_bin())
-        .args([
-            "sweep",
-            "--preset",
-            "ci",
-            "--emit",
-            "slurm",
-            "--ranks-per-run",
-            "2",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(2));
-    let e = stderr(&o);
-    assert!(
-        e.contains("`--ranks-per-run`") && e.contains("--features mpi"),
-        "{e}"
-    );
-    assert!(!out.join("sweep.sbatch").exists());
+fn runs_over_ranks_need_the_mpi_feature() {
+    for (args, field, written) in [
+        (
+            vec!["bench", "--native-only", "--ranks", "1,2"],
+            "`--ranks`",
+            "bench.json",
+        ),
+        (
+            vec![
+                "sweep",
+                "--preset",
+                "ci",
+                "--emit",
+                "slurm",
+                "--ranks-per-run",
+                "2",
+            ],
+            "`--ranks-per-run`",
+            "sweep.sbatch",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("o");
+        let o = std::process::Command::new(common::verify_bin())
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let e = stderr(&o);
+        assert!(e.contains(field) && e.contains("--features mpi"), "{e}");
+        assert!(!out.join(written).exists(), "{args:?}");
+    }
 }
 
 #[test]

@@ -222,19 +222,6 @@ fn the_bench_measures_two_ranks_beside_one() {
     assert!(text(&o).contains("`--native-only`"), "{}", text(&o));
 }
 
-/// Stops the local SLURM however the test ends.
-struct Slurm(std::path::PathBuf);
-
-impl Drop for Slurm {
-    fn drop(&mut self) {
-        let _ = Command::new("bash")
-            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
-            .arg("stop")
-            .arg(&self.0)
-            .status();
-    }
-}
-
 /// A sweep's SLURM array with `--ranks-per-run 2`: each run one simulation over the 2 MPI
 /// tasks `srun` starts, its series byte for byte the local one-process run's (issue #39).
 #[test]
@@ -251,18 +238,7 @@ fn a_slurm_sweep_runs_each_run_over_two_ranks_to_one_process_bytes() {
     };
     let local = dir.path().join("local");
     ran(&sweep(&local, &["--threads", "1"]), "the local sweep");
-    let state = dir.path().join("slurm");
-    let start = Command::new("bash")
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
-        .arg("start")
-        .arg(&state)
-        .output()
-        .unwrap();
-    let _guard = Slurm(state);
-    ran(
-        &start,
-        "a local SLURM (CI installs slurmctld, slurmd, munge)",
-    );
+    let _slurm = common::Slurm::start(&dir.path().join("slurm"));
     let cluster = dir.path().join("cluster");
     ran(
         &sweep(&cluster, &["--emit", "slurm", "--ranks-per-run", "2"]),

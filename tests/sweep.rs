@@ -261,19 +261,6 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
     assert!(text(&o).contains("--converged"), "{}", text(&o));
 }
 
-/// Stops the local SLURM however the test ends.
-struct Slurm(std::path::PathBuf);
-
-impl Drop for Slurm {
-    fn drop(&mut self) {
-        let _ = Command::new("bash")
-            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
-            .arg("stop")
-            .arg(&self.0)
-            .status();
-    }
-}
-
 #[test]
 fn reduced_sweep_through_a_local_slurm_equals_the_local_run() {
     let dir = tempfile::tempdir().unwrap();
@@ -289,20 +276,7 @@ fn reduced_sweep_through_a_local_slurm_equals_the_local_run() {
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", text(&o));
 
-    let state = dir.path().join("slurm");
-    let start = Command::new("bash")
-        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
-        .arg("start")
-        .arg(&state)
-        .output()
-        .unwrap();
-    let _guard = Slurm(state.clone());
-    assert!(
-        start.status.success(),
-        "a local SLURM could not be started (needs root and slurmctld, slurmd, slurm-client, \
-         munge; CI installs them):\n{}",
-        text(&start)
-    );
+    let _slurm = common::Slurm::start(&dir.path().join("slurm"));
     let cluster = dir.path().join("cluster");
     let o = sweep(&[
         "--engine",

@@ -209,3 +209,38 @@ pub fn wait_for(path: &std::path::Path, secs: u64) {
         std::thread::sleep(Duration::from_millis(5));
     }
 }
+
+/// A local SLURM (`tools/slurm-local.sh`) with its state in a folder, stopped however the test
+/// ends.
+pub struct Slurm(std::path::PathBuf);
+
+impl Slurm {
+    /// Starts it; fails the test with the script's output when it cannot (it needs root and
+    /// slurmctld, slurmd, slurm-client, munge: CI installs them).
+    pub fn start(state: &std::path::Path) -> Slurm {
+        let o = std::process::Command::new("bash")
+            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
+            .arg("start")
+            .arg(state)
+            .output()
+            .unwrap();
+        let slurm = Slurm(state.to_path_buf());
+        assert!(
+            o.status.success(),
+            "a local SLURM could not be started (needs root and slurmctld, slurmd, \
+             slurm-client, munge; CI installs them):\n{}",
+            text(&o)
+        );
+        slurm
+    }
+}
+
+impl Drop for Slurm {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("bash")
+            .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/tools/slurm-local.sh"))
+            .arg("stop")
+            .arg(&self.0)
+            .status();
+    }
+}
