@@ -474,17 +474,18 @@ pub fn timed_steps(s: &mut dyn Stepper, t: crate::ranks::Timing) -> Result<Timed
 
 /// A bench's native run of `case` from `packing`: this process's, or under `mpirun` (the
 /// `mpi` feature) decomposed over the ranks, timed on rank 0's brick; `after` reads the
-/// stepper at the end (one process's state, or rank 0's brick).
+/// stepper at the end (one process's state, or rank 0's brick) with what was measured.
 pub fn bench_native<R>(
     case: &ShearCase,
     packing: &Packing,
     timing: crate::ranks::Timing,
-    after: impl FnOnce(&mut dyn Stepper) -> R,
+    after: impl FnOnce(&Timed, &mut dyn Stepper) -> R,
 ) -> Result<(Timed, R)> {
     let sim = ShearSim::new(&case.setup(), packing);
     step_native(case, packing, sim, 0, Some(timing), |s| {
         let timed = timed_steps(s, timing)?;
-        Ok((timed, after(s)))
+        let got = after(&timed, s);
+        Ok((timed, got))
     })
 }
 

@@ -527,7 +527,6 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         if a.rounds > 1 {
             println!("  round {} of {}", round + 1, a.rounds);
         }
-        let here = if world > 1 { world } else { 1 };
         if world > 1 || a.ranks.contains(&1) {
             for &kernel in &a.kernels {
                 for &t in &a.threads {
@@ -546,16 +545,24 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         kernel,
                     };
                     let model_now = scaling.is_none() && world == 1 && t == 1;
-                    let (timed, (counts, held, cand, model)) = pool.install(|| {
-                        bench_native(&c, &state, timing, |s| {
+                    let (timed, (counts, held, cand, fit)) = pool.install(|| {
+                        bench_native(&c, &state, timing, |timed, s| {
                             let l = s.local();
-                            (
-                                l.contact_counts(),
-                                l.memory(),
-                                l.plate_candidates(),
-                                // the 1-rank run's state and costs for the scaling model
-                                model_now.then(|| (l.clone(), l.listed_pairs())),
-                            )
+                            // the 1-rank run's costs and its state's census for the scaling
+                            // model, taken here (the state is not kept)
+                            let fit = model_now
+                                .then(|| {
+                                    let p = timed.phases.as_ref()?;
+                                    let costs = super::scaling::Costs::of(
+                                        p,
+                                        l.listed_pairs(),
+                                        n,
+                                        timed.rebuilds,
+                                    )?;
+                                    Some(super::scaling::fit(l, costs, &MODEL_RANKS))
+                                })
+                                .flatten();
+                            (l.contact_counts(), l.memory(), l.plate_candidates(), fit)
                         })
                     })?;
                     let Timed {
@@ -565,11 +572,8 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         rebuilds,
                         traffic,
                     } = timed;
-                    if let Some((sim, pairs)) = model {
-                        scaling = phases
-                            .as_ref()
-                            .and_then(|p| super::scaling::Costs::of(p, pairs, n, rebuilds))
-                            .map(|costs| (sim, costs));
+                    if fit.is_some() {
+                        scaling = fit;
                     }
                     if first {
                         held_native = held
@@ -592,17 +596,17 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         code: "native".into(),
                         round,
                         workers: t,
-                        ranks: here,
+                        ranks: world,
                         particles: n,
                         steps: steps[1],
                         seconds: secs,
                         cpu_seconds: cpu,
                         particle_steps_per_s: r,
-                        per_core: r / (t * here) as f64,
+                        per_core: r / (t * world) as f64,
                         kernel: Some(kernel),
                         phases,
                         // a brick's counts are of its own particles and ghosts: one process's only
-                        per_particle: (here == 1).then(|| {
+                        per_particle: (world == 1).then(|| {
                             (
                                 counts.0 as f64 / n as f64,
                                 counts.1 as f64 / n as f64,
@@ -613,7 +617,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         traffic,
                     };
                     print_row(&row);
-                    if here == 1 {
+                    if world == 1 {
                         println!(
                             "           {:.1} % of the particles test {:.1} plate triangles each",
                             100.0 * cand.0 as f64 / n as f64,
@@ -740,8 +744,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             paper_ps / median_rate / 3600.0,
         ));
     }
-    let scaling =
-        scaling.map(|(sim, costs)| super::scaling::model(&sim, costs, link, &MODEL_RANKS));
+    let scaling = scaling.map(|f| super::scaling::model(&f, link));
     let measured_2_ranks = rate("native", 1, 2, kernel);
     let report = BenchReport {
         schema: super::SCHEMA,

@@ -28,6 +28,7 @@
 //! a few kB per rank, all-reduced: the bytes of the plate shares, which every brick receives
 //! whole, gone), so the figure says what each change would buy before it is made.
 
+use crate::solver::shear::bricks::Bricks;
 use crate::solver::shear::decompose::{censuses, Census, Link};
 use crate::solver::shear::{PhaseTimes, ShearSim};
 use serde::{Deserialize, Serialize};
@@ -120,11 +121,35 @@ pub struct Scaling {
     pub too_thin: Vec<usize>,
 }
 
-/// The model over `ranks` for the state `s` (one process's, as its last rebuild left it).
-pub fn model(s: &ShearSim, costs: Costs, link: Option<Link>, ranks: &[usize]) -> Scaling {
-    let (n, pairs_total) = (s.particle_count(), s.listed_pairs());
+/// What the model is fitted to: one process's costs, and its state's census at each rank
+/// count (taken where the state is, so that the state need not be kept).
+#[derive(Clone, Debug)]
+pub struct Fit {
+    particles: usize,
+    pairs: usize,
+    costs: Costs,
+    splits: Vec<(Bricks, Census)>,
+    too_thin: Vec<usize>,
+}
+
+/// The [`Fit`] over `ranks` of the state `s` (one process's, as its last rebuild left it).
+pub fn fit(s: &ShearSim, costs: Costs, ranks: &[usize]) -> Fit {
     let (splits, too_thin) = censuses(s, ranks);
-    let points = splits
+    Fit {
+        particles: s.particle_count(),
+        pairs: s.listed_pairs(),
+        costs,
+        splits,
+        too_thin,
+    }
+}
+
+/// The model's predictions from a [`Fit`], on `link` (this machine's, if measured) and on
+/// [`CLUSTER`]'s.
+pub fn model(f: &Fit, link: Option<Link>) -> Scaling {
+    let (n, pairs_total, costs) = (f.particles, f.pairs, f.costs);
+    let points = f
+        .splits
         .iter()
         .map(|(bricks, c)| point(c, bricks.nx, bricks.nz, costs, link, pairs_total))
         .collect();
@@ -135,7 +160,7 @@ pub fn model(s: &ShearSim, costs: Costs, link: Option<Link>, ranks: &[usize]) ->
         cluster: CLUSTER,
         one_rank_s: costs.per_pair_s * pairs_total as f64 + costs.per_particle_s * n as f64,
         points,
-        too_thin,
+        too_thin: f.too_thin.clone(),
     }
 }
 
@@ -308,7 +333,7 @@ mod tests {
             latency_s: 1e-6,
             seconds_per_byte: 1e-9,
         };
-        let m = model(&s, k, Some(link), &[1, 2]);
+        let m = model(&fit(&s, k, &[1, 2]), Some(link));
         assert!((m.one_rank_s / per_step - 1.0).abs() < 1e-9);
         let (one, two) = (&m.points[0], &m.points[1]);
         assert_eq!((one.messages_built, one.bytes_per_step), (0.0, 0.0));

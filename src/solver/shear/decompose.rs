@@ -238,8 +238,7 @@ pub struct Census {
 /// The [`Census`] of `s` split into `bricks`, by the rule the bricks are made by
 /// ([`Brick::of`]: ownership and ghosts from `xhold`, the cut `2 r_max + skin`).
 pub fn census(s: &ShearSim, bricks: Bricks) -> Census {
-    let rmax = s.radius.iter().cloned().fold(0.0, f64::max);
-    let cut = 2.0 * rmax + s.skin;
+    let cut = s.ghost_cut();
     let n = bricks.count();
     let owner: Vec<usize> = s.xhold.iter().map(|&p| bricks.owner(p)).collect();
     let mut c = Census {
@@ -261,7 +260,7 @@ pub fn census(s: &ShearSim, bricks: Bricks) -> Census {
         }
     }
     for (q, &o) in owner.iter().enumerate() {
-        if s.wall_start[q] != s.wall_start[q + 1] {
+        if s.has_plate_candidates(q) {
             c.plate[o] += 1;
         }
     }
@@ -271,8 +270,7 @@ pub fn census(s: &ShearSim, bricks: Bricks) -> Census {
 /// The [`Census`] of `s` split as `ranks` ranks split it ([`split_for`]), for each count
 /// whose bricks are wider than the ghost cut; the counts left out (narrower bricks).
 pub fn censuses(s: &ShearSim, ranks: &[usize]) -> (Vec<(Bricks, Census)>, Vec<usize>) {
-    let rmax = s.radius.iter().cloned().fold(0.0, f64::max);
-    let cut = 2.0 * rmax + s.skin;
+    let cut = s.ghost_cut();
     let (mut splits, mut thin) = (Vec::new(), Vec::new());
     for &r in ranks {
         let b = split_for(r, s.box_.lx, s.box_.lz);
@@ -404,8 +402,7 @@ impl Brick {
     /// Brick `me` of `bricks` from the whole state `global` as it is (its own particles and
     /// ghosts as the last rebuild chose them, from the positions then, `xhold`; no rebuild).
     pub fn of(global: &ShearSim, bricks: Bricks, me: usize) -> Brick {
-        let rmax = global.radius.iter().cloned().fold(0.0, f64::max);
-        let cut = 2.0 * rmax + global.skin;
+        let cut = global.ghost_cut();
         let held = global.xhold.clone();
         let (ids, own) = bricks.members(me, &held, cut);
         let ghost: Vec<bool> = own.iter().map(|o| !o).collect();
@@ -487,10 +484,9 @@ impl Brick {
             }
         }
         // every brick's own particles with plate candidates, from the whole state
-        let with_candidates = |q: usize| global.wall_start[q] != global.wall_start[q + 1];
         let mut ids_by_rank = vec![Vec::new(); bricks.count()];
         for (q, p) in held.iter().enumerate() {
-            if with_candidates(q) {
+            if global.has_plate_candidates(q) {
                 ids_by_rank[bricks.owner(*p)].push(q as u32);
             }
         }
@@ -999,7 +995,7 @@ pub fn split_for(ranks: usize, lx: f64, lz: f64) -> Bricks {
 /// of the plate forces until the next rebuild.
 fn own_with_candidates(s: &ShearSim) -> Vec<u32> {
     (0..s.x.len())
-        .filter(|&l| !s.ghost[l] && s.wall_start[l] != s.wall_start[l + 1])
+        .filter(|&l| !s.ghost[l] && s.has_plate_candidates(l))
         .map(|l| l as u32)
         .collect()
 }
@@ -1023,6 +1019,17 @@ fn agree<T>(
 }
 
 impl ShearSim {
+    /// How far from a brick its ghosts reach: the pair list's cutoff
+    /// ([`super::neighbor::cutoff`]).
+    fn ghost_cut(&self) -> f64 {
+        super::neighbor::cutoff(&self.radius, self.skin)
+    }
+
+    /// Whether particle `q` has plate candidates (since the last rebuild).
+    fn has_plate_candidates(&self, q: usize) -> bool {
+        self.wall_start[q] != self.wall_start[q + 1]
+    }
+
     /// Every field of `like` but the per-particle ones and the pair list (empty here):
     /// what a brick, or a state gathered from bricks, fills in.
     fn without_particles(like: &ShearSim) -> ShearSim {

@@ -84,6 +84,12 @@ pub struct Periodic {
     pub lz: f64,
 }
 
+/// The list's cutoff, `2 r_max + skin`: every pair that may touch before the next rebuild is
+/// listed, so it bounds every partner a particle can have: what a brick's ghosts must cover.
+pub fn cutoff(radius: &[f64], skin: f64) -> f64 {
+    2.0 * radius.iter().cloned().fold(0.0, f64::max) + skin
+}
+
 /// The histories a rebuild may carry over: those of listed pairs with a bit set (a touching
 /// pair with an all-zero history gets the same bits as a new one), each with its pair's
 /// `(i, j)` as global ids, sorted by the pair's key (lower id, higher id).
@@ -196,8 +202,7 @@ impl NeighborList {
         carried: Carried,
     ) {
         let n = x.len();
-        let rmax = radius.iter().cloned().fold(0.0, f64::max);
-        let cut = 2.0 * rmax + skin;
+        let cut = cutoff(radius, skin);
         let (ymin, ymax) = x
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
