@@ -157,6 +157,16 @@ mod tests {
         let a = series(&[]);
         let e = compare("c", "m", &a, &a, 1e-9).unwrap_err().to_string();
         assert!(e.contains("no rows"), "{e}");
+        // one of the two empty is the same error, either way round (a cargo-mutants
+        // survivor: `&&` for `||` let it through to another message)
+        let b = series(&[[1.0, 0.0, 0.0]]);
+        for (x, y) in [(&a, &b), (&b, &a)] {
+            let e = compare("c", "m", x, y, 1e-9).unwrap_err().to_string();
+            assert!(
+                e.contains("no rows (0 and 1)") || e.contains("no rows (1 and 0)"),
+                "{e}"
+            );
+        }
     }
 
     #[test]
@@ -190,6 +200,13 @@ mod tests {
         let mut c = b.clone();
         c.rows[1][0] = f64::NAN;
         assert!(!compare("c", "m", &a, &c, 1e-9).unwrap()[0].pass);
+        // the step named is the first where the largest difference occurs, and with no
+        // difference at all the first step (a cargo-mutants survivor: `>` to `>=` named
+        // the last)
+        let a = series(&[[1.0, 0.0, 0.0], [2.0, 0.0, 0.0], [3.0, 0.0, 0.0]]);
+        let b = series(&[[1.0, 0.0, 0.0], [2.5, 0.0, 0.0], [3.5, 0.0, 0.0]]);
+        assert_eq!(compare("c", "m", &a, &b, 1e-9).unwrap()[0].worst_step, 1);
+        assert_eq!(compare("c", "m", &a, &a, 1e-9).unwrap()[0].worst_step, 0);
     }
 
     #[test]
@@ -417,6 +434,13 @@ pub struct Steady {
     pub per_seed_stress: Vec<f64>,
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
     pub normal_stress: f64,
+    /// 95 % CI half-width of `normal_stress` [Pa] (over seeds; one seed: 10 block means of
+    /// the window). NaN in summaries stored before 2026-12-06.
+    #[serde(
+        default = "crate::fsutil::nan",
+        deserialize_with = "crate::fsutil::f64_or_nan"
+    )]
+    pub normal_stress_ci95: f64,
     /// Rotational kinetic energy [J]: mean over seeds of the window means, with its 95 % CI
     /// (as for mu).
     #[serde(deserialize_with = "crate::fsutil::f64_or_nan")]
@@ -471,23 +495,25 @@ pub fn steady(series: &[Series], window: (u64, u64), area: f64) -> Steady {
         .iter()
         .map(|s| window_figures(s, window, area))
         .collect();
-    let mean_and_ci = |pick: fn(&WindowFigures) -> f64, header: &str| match series {
+    let mean_and_ci = |pick: fn(&WindowFigures) -> f64, header: &str, scale: f64| match series {
         [one] => (
             pick(&per[0]),
-            block_ci95(&one.window_values(header, window).unwrap_or_default()),
+            block_ci95(&one.window_values(header, window).unwrap_or_default()) / scale,
         ),
         _ => mean_ci95(&per.iter().map(pick).collect::<Vec<f64>>()),
     };
     let mean =
         |pick: fn(&WindowFigures) -> f64| mean_ci95(&per.iter().map(pick).collect::<Vec<f64>>()).0;
-    let (mu, mu_ci95) = mean_and_ci(|f| f.mu, "mu[-]");
-    let (erot, erot_ci95) = mean_and_ci(|f| f.erot, "erot[J]");
+    let (mu, mu_ci95) = mean_and_ci(|f| f.mu, "mu[-]", 1.0);
+    let (erot, erot_ci95) = mean_and_ci(|f| f.erot, "erot[J]", 1.0);
+    let (normal_stress, normal_stress_ci95) = mean_and_ci(|f| f.normal_stress, "top_f_y[N]", area);
     Steady {
         per_seed_mu: per.iter().map(|f| f.mu).collect(),
         mu,
         mu_ci95,
         per_seed_stress: per.iter().map(|f| f.normal_stress).collect(),
-        normal_stress: mean(|f| f.normal_stress),
+        normal_stress,
+        normal_stress_ci95,
         erot,
         erot_ci95,
         ke: mean(|f| f.ke),
@@ -846,7 +872,12 @@ mod equivalence_tests {
         let e = equivalence(&a, &c, 0.03).unwrap();
         assert_eq!(e.outcome, Outcome::Disagree);
         assert_eq!(e.seeds_needed, None);
+        // the mean difference itself (a cargo-mutants survivor: `sum * n` for `sum / n`
+        // passed, every other mean here being 0)
+        assert!((e.mean - 0.1).abs() < 1e-12, "{}", e.mean);
         assert!(equivalence(&a[..1], &b[..1], 0.03).is_none());
+        // two pairs are enough for a spread (a cargo-mutants survivor: `<= 2` passed)
+        assert_eq!(equivalence(&a[..2], &b[..2], 0.03).map(|e| e.n), Some(2));
         // the phrase the verdict prints (a cargo-mutants survivor: any text passed)
         let e = equivalence(&[0.5, 0.5, 0.5], &[0.55, 0.45, 0.5], 0.03).unwrap();
         assert_eq!(
@@ -905,5 +936,34 @@ mod equivalence_tests {
             equivalence_one_seed(0.5, 0.03, 0.51, 0.04, 0.03).outcome,
             Outcome::Inconclusive
         );
+    }
+}
+
+#[cfg(test)]
+mod steady_tests {
+    use super::*;
+
+    /// The normal stress's CI: with one seed from 10 block means of the window's force over
+    /// the area, with several over the seeds' means; the mean is the seeds' mean either way.
+    #[test]
+    fn the_normal_stress_has_its_ci() {
+        let one = |f: &[f64]| Series {
+            columns: vec!["top_f_y[N]".into(), "mu[-]".into()],
+            steps: (1..=f.len() as u64).collect(),
+            rows: f.iter().map(|v| vec![*v, 0.5]).collect(),
+        };
+        let f: Vec<f64> = (0..40)
+            .map(|k| 10.0 + if k % 8 < 4 { 1.0 } else { -1.0 })
+            .collect();
+        // the window (0, 40]: every row
+        let st = steady(&[one(&f)], (0, 40), 2.0);
+        assert!((st.normal_stress - 5.0).abs() < 1e-12);
+        let expect = block_ci95(&f) / 2.0;
+        assert!(expect > 0.0);
+        assert_eq!(st.normal_stress_ci95, expect);
+        let g: Vec<f64> = f.iter().map(|v| v + 2.0).collect();
+        let st = steady(&[one(&f), one(&g)], (0, 40), 2.0);
+        assert!((st.normal_stress - 5.5).abs() < 1e-12);
+        assert_eq!(st.normal_stress_ci95, mean_ci95(&[5.0, 6.0]).1);
     }
 }

@@ -96,6 +96,12 @@ pub fn tail(text: &str, n: usize) -> String {
     lines[lines.len().saturating_sub(n)..].join("\n")
 }
 
+/// NaN: the `#[serde(default)]` of a figure that older stored files lack (unknown, so judged
+/// by the rule that needs no such figure).
+pub fn nan() -> f64 {
+    f64::NAN
+}
+
 /// Deserializes an f64 that may be `null`: serde_json writes NaN and infinities as `null`, so
 /// reading a stored summary back maps `null` to NaN (use with `#[serde(deserialize_with)]` on
 /// fields that can be NaN: one-seed CIs, quantities a code does not report).

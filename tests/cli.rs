@@ -202,13 +202,15 @@ fn json_puts_one_document_on_stdout() {
 fn studies_round_trip_plan_and_refuse_unknown_fields() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    // a ci-sized study, end to end from its file
+    // a ci-sized study, end to end from its file (the servo check widened to 5 %: this test
+    // is about the file, and one seed's mean stress strays by 1-2 % with the trajectory)
     let first = dir.path().join("ci.toml");
     std::fs::write(
         &first,
         format!(
             "version = 1\ncommand = \"shear\"\n[options]\npreset = \"ci\"\nseeds = 1\n\
-             strain = 0.05\nnative_only = true\nout = \"{}\"\n",
+             strain = 0.05\nstress_rtol = {}\nnative_only = true\nout = \"{}\"\n",
+            common::MECHANICS_STRESS_RTOL,
             out.display()
         ),
     )

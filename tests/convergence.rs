@@ -67,8 +67,10 @@ fn convergence_runs_and_reports_stability_per_dt() {
     // both codes show the same artefact at the paper's dt: they do not differ there
     // (measured 0.258 +- 0.027 native, 0.292 +- 0.030 LIGGGHTS: one seed's block CIs cannot
     // show them within 0.03 either, so "inconclusive" is the honest word), both far below
-    // native at dt / 2 (0.94 +- 0.02); the stable dashpot at the paper's dt does not differ
-    // from dt / 2
+    // native at dt / 2 (0.94 +- 0.02); the stable dashpot at the paper's dt removes most of
+    // the artefact (native at dt / 2 is itself not converged, S = 7.1, so equality with it is
+    // not a claim one seed can test: measured since the exact plate sum, implicit 1.188,
+    // dt / 2 1.053, dt 0.239)
     assert_eq!(s.codes_agree.len(), 1, "{s:?}");
     assert_eq!(s.codes_agree[0].0, 1.0);
     assert_ne!(s.codes_agree[0].1.outcome, Outcome::Disagree, "{s:?}");
@@ -76,10 +78,13 @@ fn convergence_runs_and_reports_stability_per_dt() {
         .implicit_matches_finest
         .as_ref()
         .expect("with --with-implicit");
-    assert_ne!(im.outcome, Outcome::Disagree, "{s:?}");
     let step = verdict(StudyCode::Native).finest_step.clone().unwrap();
     assert_eq!(step.outcome, Outcome::Disagree, "{step:?}");
     assert!(step.mean > 0.4, "dt / 2 minus dt: {step:?}");
+    assert!(
+        im.mean.abs() < step.mean.abs() / 3.0,
+        "implicit at dt against dt / 2 {im:?}, dt / 2 against dt {step:?}"
+    );
     let point = |code, f: f64| {
         s.points
             .iter()
@@ -136,9 +141,13 @@ fn convergence_runs_and_reports_stability_per_dt() {
 }
 
 /// The positive side: where the explicit dashpot is stable, (mu_r, eta_r) = (0.5, 0), halving
-/// dt leaves the steady friction where it was (3 seeds: measured 0.5636 +- 0.0598 and
-/// 0.5671 +- 0.0247), so the study must say "converged" (exit 0): the seed-paired difference
-/// is equivalent to 0 within the margin 0.03.
+/// dt leaves the steady friction where it was, so the study must say "converged" (exit 0):
+/// the seed-paired difference is equivalent to 0 within the margin. Sized to decide whatever
+/// the trajectories' last bits: the per-seed difference spreads by 0.039 (12 seeds, measured
+/// 2026-12-06: -0.0099, 90 % CI [-0.0300, +0.0103]), so 3 seeds at 0.03 decided only by luck
+/// (they did until the exact plate sum changed the bits, then said inconclusive); 12 seeds at
+/// a margin of 0.05 (still half the paper's smallest effect, 0.1) fail to agree only when
+/// the mean strays by 2.6 of its standard errors (about 1 %).
 #[test]
 fn a_stable_point_converges() {
     let dir = tempfile::tempdir().unwrap();
@@ -152,7 +161,9 @@ fn a_stable_point_converges() {
         "--preset",
         "ci",
         "--seeds",
-        "3",
+        "12",
+        "--mu-margin",
+        "0.05",
         "--strain",
         "0.1",
         "--dt-factors",
@@ -166,16 +177,17 @@ fn a_stable_point_converges() {
     assert_eq!(o.status.code(), Some(0), "{text}");
     let s: ConvergenceSummary = dem_verify::run::load(&out.join("summary.json")).unwrap();
     assert!(s.converged, "{s:?}");
-    // the equivalence test decided it: the paired difference of dt / 2 and dt over the 3 seeds
-    // (same compacted states) lies within 0.03 (measured +0.0035, 90 % CI [-0.0206, +0.0276])
+    // the equivalence test decided it: the paired difference of dt / 2 and dt over the 12
+    // seeds (same compacted states) lies within 0.05
     let step = s.per_code[0].finest_step.clone().unwrap();
-    assert_eq!((step.n, step.outcome), (3, Outcome::Agree), "{step:?}");
+    assert_eq!((step.n, step.outcome), (12, Outcome::Agree), "{step:?}");
     assert_eq!(s.points.len(), 2, "{s:?}");
     for p in &s.points {
         assert!(p.stability.stable, "{p:?}");
-        assert_eq!(p.steady.per_seed_mu.len(), 3);
+        assert_eq!(p.steady.per_seed_mu.len(), 12);
         assert!((0.3..0.8).contains(&p.steady.mu), "{p:?}");
-        assert!(p.steady.mu_ci95 > 0.0 && p.steady.mu_ci95 < 0.1, "{p:?}");
+        // over 12 seeds (measured 0.090 and 0.093)
+        assert!(p.steady.mu_ci95 > 0.0 && p.steady.mu_ci95 < 0.15, "{p:?}");
     }
     assert!(text.contains("verdict: agree"), "{text}");
 }

@@ -658,6 +658,7 @@ mod tests {
                         mu_ci95: 0.01,
                         per_seed_stress: vec![1e7],
                         normal_stress: 1e7,
+                        normal_stress_ci95: 1e4,
                         erot: 1e-6,
                         erot_ci95: 1e-7,
                         ke: 1e-5,

@@ -22,7 +22,7 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
     for (code, st) in [("LIGGGHTS", &ls), ("native", &ns)] {
         if let Some(st) = st {
             say!(
-                "  {code:<8} mu = {:.4} +- {:.4} (95 % CI)  per seed [{}]  normal stress [{}] MPa",
+                "  {code:<8} mu = {:.4} +- {:.4} (95 % CI)  per seed [{}]  normal stress [{}] MPa, mean {:.3} +- {:.3}",
                 st.mu,
                 st.mu_ci95,
                 st.per_seed_mu
@@ -34,7 +34,9 @@ pub fn print_summary(summary: &ShearSummary, out: &Path) {
                     .iter()
                     .map(|s| format!("{:.3}", s / 1e6))
                     .collect::<Vec<_>>()
-                    .join(", ")
+                    .join(", "),
+                st.normal_stress / 1e6,
+                st.normal_stress_ci95 / 1e6
             );
         }
     }

@@ -13,20 +13,22 @@
 //! - `t_pair`, `t_part`: the costs per pair (pair pass, sums and walls) and per particle
 //!   (integration, neighbour lists, plates) of the 1-rank run of the same bench, from its
 //!   phase times (by construction they give back its time per step);
-//! - `M_b` messages per step, `B_b` bytes per step a brick receives: every step two
-//!   exchanges (the ghosts' positions, 72 bytes per ghost; the plate force shares, 48 bytes
-//!   per particle with plate candidates, of every brick), and a rebuild's seven exchanges
-//!   amortised over the measured steps between rebuilds;
+//! - `M_b` messages per step, `B_b` bytes per step a brick receives: every step the ghosts'
+//!   positions from the neighbouring bricks (72 bytes per ghost, one message per neighbour)
+//!   and two all-reduces (the skin flag, 8 bytes; the plate forces' exact sum, 208 bytes:
+//!   about log2 R messages each), and a rebuild's three exchanges (the divergence check,
+//!   the migration, the ghosts: each an all-to-all of sizes and one of messages, R - 1
+//!   messages each) amortised over the measured steps between rebuilds;
 //! - `alpha` (latency per message) and `beta_inv` (time per byte): this machine's, measured
 //!   by the bench's link probe under `mpirun` ([`Link`]), or a cluster's, assumed.
 //!
-//! As built, each exchange is an all-to-all in which every message carries a flag, so each
-//! brick sends R - 1 messages per exchange: the latency term grows with R. The model also
-//! gives the design that removes it (ghosts sent to neighbouring bricks only, the flags by an
-//! all-reduce, the plate shares by an all-gather: about `neighbours + 3 log2 R` messages per
-//! step), and beyond it the plate forces summed exactly (an order-independent accumulator of
-//! a few kB per rank, all-reduced: the bytes of the plate shares, which every brick receives
-//! whole, gone), so the figure says what each change would buy before it is made.
+//! The rebuild's all-to-alls are what still grows with R: the model also gives the design
+//! that removes them (migrants and ghosts sent to neighbouring bricks only, the divergence
+//! check by an all-reduce), so the figure says what that change would buy before it is
+//! made. Until 2026-12-06 every step made two all-to-alls (a flag in every message) and
+//! every brick received every plate particle's force share to add them in id order (1.3 MB a
+//! step at 250,000 particles); the exact sum ([`crate::solver::shear::exact`]) and
+//! neighbour-only step messages replaced them.
 
 use crate::solver::shear::bricks::Bricks;
 use crate::solver::shear::decompose::{censuses, Census, Link};
@@ -41,17 +43,18 @@ pub const CLUSTER: Link = Link {
     seconds_per_byte: 1.0e-10,
 };
 
-/// Exchanges of a rebuild: the divergence check, the migration, the ghosts and the plate
-/// plan (each two collective calls: sizes, then the messages) ([`crate::solver::shear::decompose`]).
-const REBUILD_EXCHANGES: f64 = 7.0;
+/// Collective all-to-all calls of a rebuild: the divergence check, the migration and the
+/// ghosts, each two (sizes, then the messages) ([`crate::solver::shear::decompose`]).
+const REBUILD_CALLS: f64 = 6.0;
+/// Messages of a rebuild with neighbour-only exchanges: the divergence check by an
+/// all-reduce (log2 R), the migration and the ghosts to each neighbour (two each).
+const REBUILD_NEIGHBOUR_EXCHANGES: f64 = 2.0;
 
 /// Bytes per ghost sent every step: position, velocity, angular velocity.
 const GHOST_BYTES: f64 = 72.0;
-/// Bytes per particle with plate candidates sent every step: its bottom and top plate forces.
-const PLATE_BYTES: f64 = 48.0;
-/// Bytes of an exact (order-independent) accumulator of the 6 plate force components, per
-/// step of an all-reduce (a 2,100-bit fixed point per component).
-const EXACT_SUM_BYTES: f64 = 6.0 * 264.0;
+/// Bytes of a step's two all-reduces: the skin flag, and the plate forces' exact sum (26
+/// words: [`crate::solver::shear::exact::LIMB_LEN`] and an error count).
+const REDUCE_BYTES: f64 = 8.0 * (1.0 + 26.0);
 
 /// The costs a 1-rank run measured.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -92,19 +95,16 @@ pub struct ScalePoint {
     pub pair_overhead: f64,
     /// Bytes a brick receives per step (the most of any).
     pub bytes_per_step: f64,
-    /// Messages a brick sends per step as built, and with neighbour-only messages.
+    /// Messages a brick sends per step as built, and with neighbour-only rebuilds.
     pub messages_built: f64,
     pub messages_neighbour: f64,
     /// Compute time per step of the slowest brick [s].
     pub compute_s: f64,
-    /// Predicted time per step [s]: as built and with neighbour-only messages, on this
-    /// machine's link (None without a probe) and on [`CLUSTER`]'s.
+    /// Predicted time per step [s]: as built, on this machine's link (None without a probe)
+    /// and on [`CLUSTER`]'s; and with neighbour-only rebuilds on [`CLUSTER`]'s.
     pub here_built_s: Option<f64>,
     pub cluster_built_s: f64,
     pub cluster_neighbour_s: f64,
-    /// With neighbour-only messages and the plate forces summed exactly (an all-reduce of
-    /// accumulators), on [`CLUSTER`]'s link.
-    pub cluster_exact_s: f64,
 }
 
 /// The model's predictions and its check against what this machine ran.
@@ -174,14 +174,6 @@ fn point(
 ) -> ScalePoint {
     let r = c.own.len();
     let others = (r - 1) as f64;
-    let plate_total: usize = c.plate.iter().sum();
-    // a lone brick exchanges nothing
-    let exchanges = if r == 1 {
-        0.0
-    } else {
-        2.0 + 2.0 * REBUILD_EXCHANGES / k.steps_per_rebuild
-    };
-    let messages_built = exchanges * others;
     let neighbours = if r == 1 {
         0.0
     } else {
@@ -189,37 +181,38 @@ fn point(
         let side = |n: usize| (n.min(3) - 1) as f64;
         (side(nx) + 1.0) * (side(nz) + 1.0) - 1.0
     };
-    let messages_neighbour = if r == 1 {
-        0.0
+    let log_r = (r as f64).log2();
+    // a lone brick exchanges nothing
+    let (messages_built, messages_neighbour) = if r == 1 {
+        (0.0, 0.0)
     } else {
-        neighbours
-            + 3.0 * (r as f64).log2()
-            + 2.0 * REBUILD_EXCHANGES / k.steps_per_rebuild * others
+        let step = neighbours + 2.0 * log_r;
+        let rebuild = |m: f64| m / k.steps_per_rebuild;
+        (
+            step + rebuild(REBUILD_CALLS * others),
+            step + rebuild(log_r + REBUILD_NEIGHBOUR_EXCHANGES * neighbours),
+        )
     };
-    // each brick's compute time, and bytes received per step as built and with the exact sum
-    let per_brick: Vec<(f64, f64, f64)> = (0..r)
+    // each brick's compute time, and bytes received per step
+    let per_brick: Vec<(f64, f64)> = (0..r)
         .map(|b| {
             let compute = k.per_pair_s * c.pairs[b] as f64
                 + k.per_particle_s * (c.own[b] + c.ghosts[b]) as f64;
             if r == 1 {
-                return (compute, 0.0, 0.0);
+                return (compute, 0.0);
             }
-            let ghosts = GHOST_BYTES * c.ghosts[b] as f64;
-            let shares = PLATE_BYTES * (plate_total - c.plate[b]) as f64;
-            let exact = EXACT_SUM_BYTES * (r as f64).log2();
-            (compute, ghosts + shares, ghosts + exact)
+            (
+                compute,
+                GHOST_BYTES * c.ghosts[b] as f64 + REDUCE_BYTES * log_r,
+            )
         })
         .collect();
-    let slowest_of = |l: &Link, messages: f64, exact: bool| {
+    let slowest = |l: &Link, messages: f64| {
         per_brick
             .iter()
-            .map(|&(t, built, with_exact)| {
-                let bytes = if exact { with_exact } else { built };
-                t + l.latency_s * messages + l.seconds_per_byte * bytes
-            })
+            .map(|&(t, bytes)| t + l.latency_s * messages + l.seconds_per_byte * bytes)
             .fold(0.0, f64::max)
     };
-    let slowest = |l: &Link, messages: f64| slowest_of(l, messages, false);
     let compute_s = per_brick.iter().map(|b| b.0).fold(0.0, f64::max);
     let bytes_per_step = per_brick.iter().map(|b| b.1).fold(0.0, f64::max);
     let most = |v: &[usize]| v.iter().copied().max().unwrap_or(0);
@@ -239,7 +232,6 @@ fn point(
         here_built_s: link.map(|l| slowest(&l, messages_built)),
         cluster_built_s: slowest(&CLUSTER, messages_built),
         cluster_neighbour_s: slowest(&CLUSTER, messages_neighbour),
-        cluster_exact_s: slowest_of(&CLUSTER, messages_neighbour, true),
     }
 }
 
@@ -265,7 +257,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
     )];
     out.push(
         "    ranks  bricks  particles/rank  ghosts/own  pair overhead  kB/step  msgs/step  \
-         speedup here  cluster as built  cluster neighbour-only  + exact plate sum"
+         speedup here  cluster as built  cluster, neighbour-only rebuilds"
             .into(),
     );
     for p in &s.points {
@@ -277,7 +269,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
             )
         };
         out.push(format!(
-            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.0}  {:>12}  {:>16}  {:>22}  {:>17}",
+            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.1}  {:>12}  {:>16}  {:>32}",
             p.ranks,
             p.bricks.0,
             p.bricks.1,
@@ -289,7 +281,6 @@ pub fn table(s: &Scaling) -> Vec<String> {
             p.here_built_s.map(speed).unwrap_or_else(|| "-".into()),
             speed(p.cluster_built_s),
             speed(p.cluster_neighbour_s),
-            speed(p.cluster_exact_s),
         ));
     }
     if !s.too_thin.is_empty() {
@@ -310,9 +301,9 @@ mod tests {
     use crate::spec::RollingModel;
 
     /// The costs give back the 1-rank run's time per step; one brick exchanges nothing and
-    /// takes that time; two bricks exchange as built (two exchanges a step, the rebuild's
-    /// amortised, each a message to the other brick) and receive the ghosts' and the other
-    /// brick's plate shares' bytes; the exact plate sum removes the shares' bytes.
+    /// takes that time; two bricks exchange as built (one ghost message and two all-reduces
+    /// a step, the rebuild's all-to-alls amortised) and receive the ghosts' bytes and the
+    /// all-reduces'; neighbour-only rebuilds send fewer messages only beyond a few bricks.
     #[test]
     fn the_model_gives_back_what_it_was_fitted_to() {
         let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
@@ -338,19 +329,19 @@ mod tests {
         let (one, two) = (&m.points[0], &m.points[1]);
         assert_eq!((one.messages_built, one.bytes_per_step), (0.0, 0.0));
         assert!((one.here_built_s.unwrap() / m.one_rank_s - 1.0).abs() < 1e-9);
-        assert_eq!(two.messages_built, 2.0 + 2.0 * REBUILD_EXCHANGES / 100.0);
+        // 2 x 1 bricks: one neighbour, two all-reduces of one message each
+        assert_eq!(two.messages_built, 1.0 + 2.0 + REBUILD_CALLS / 100.0);
         let (splits, _) = censuses(&s, &[2]);
         let cen = &splits[0].1;
-        let plate: usize = cen.plate.iter().sum();
         let bytes = (0..2)
-            .map(|b| {
-                GHOST_BYTES * cen.ghosts[b] as f64 + PLATE_BYTES * (plate - cen.plate[b]) as f64
-            })
+            .map(|b| GHOST_BYTES * cen.ghosts[b] as f64 + REDUCE_BYTES)
             .fold(0.0, f64::max);
         assert_eq!(two.bytes_per_step, bytes);
         assert!(two.compute_s < m.one_rank_s && two.compute_s > 0.5 * m.one_rank_s);
-        // the same messages, the shares' bytes (more than an accumulator's) gone
-        assert!(plate > 100, "{plate} particles with plate candidates");
-        assert!(two.cluster_exact_s < two.cluster_neighbour_s);
+        let m = model(&fit(&s, k, &[2, 16]), Some(link));
+        let (two, sixteen) = (&m.points[0], &m.points[1]);
+        assert!(two.messages_neighbour <= two.messages_built + 1e-12);
+        assert!(sixteen.messages_neighbour < sixteen.messages_built);
+        assert!(sixteen.cluster_neighbour_s < sixteen.cluster_built_s);
     }
 }

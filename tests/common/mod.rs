@@ -35,6 +35,12 @@ pub fn text(o: &std::process::Output) -> String {
     )
 }
 
+/// The servo check's limit of the mechanics tests' short runs: 5 %. They judge files,
+/// resumes and decompositions, not the servo; one seed's mean stress over a short window
+/// strays by 1-2 % with the trajectory's last bits (10.162 +- 0.209 MPa for 10 at strain
+/// 0.05), which the default 1 % calls inconclusive (exit 3).
+pub const MECHANICS_STRESS_RTOL: &str = "0.05";
+
 /// `verify shear` of one ci-preset seed sheared to strain 0.05 (seconds), writing to `out`,
 /// with `extra` flags.
 pub fn short_ci_shear(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
@@ -46,6 +52,8 @@ pub fn short_ci_shear(out: &std::path::Path, extra: &[&str]) -> std::process::Ou
         "1",
         "--strain",
         "0.05",
+        "--stress-rtol",
+        MECHANICS_STRESS_RTOL,
         "--out",
         out.to_str().expect("a UTF-8 path"),
     ];
@@ -63,6 +71,8 @@ pub fn native_ci_checkpointed(out: &std::path::Path, threads: &str) -> Vec<Strin
         "--seeds",
         "1",
         "--native-only",
+        "--stress-rtol",
+        MECHANICS_STRESS_RTOL,
         "--checkpoint-every",
         "0",
         "--threads",

@@ -417,6 +417,32 @@ mod history_tests {
         assert!(moved_beyond_half_skin([1.0, 2.0, 3.0 - 0.0501], hold, 0.1));
         assert!(moved_beyond_half_skin([1.03, 2.03, 3.03], hold, 0.1));
         assert!(!moved_beyond_half_skin([1.02, 2.02, 3.02], hold, 0.1));
+        // exactly skin/2 is not beyond it (0.05 is 0.5 * 0.1 to the bit; a cargo-mutants
+        // survivor: `>=` passed)
+        assert_eq!(0.5 * 0.1f64, 0.05);
+        assert!(!moved_beyond_half_skin([0.05, 0.0, 0.0], [0.0; 3], 0.1));
+    }
+
+    /// Seen from the other side, both histories change sign: the tangential spring (a
+    /// displacement of i against j) and the rolling torque history (i's torque from j; j's
+    /// from i is its opposite); turned round twice it is the same bits (a cargo-mutants
+    /// survivor: the rolling history kept its sign, held only by the shear tests, outside
+    /// the mutants' test set).
+    #[test]
+    fn a_history_turned_round_changes_the_sign_of_both_springs() {
+        let h = ContactHistory {
+            shear: [1e-7, -2e-7, 0.0],
+            r_torque: [3e-9, 0.0, -4e-9],
+        };
+        let t = h.turned_round();
+        assert_eq!(t.shear, [-1e-7, 2e-7, -0.0]);
+        assert_eq!(t.r_torque, [-3e-9, -0.0, 4e-9]);
+        let back = t.turned_round();
+        assert_eq!(back.shear.map(f64::to_bits), h.shear.map(f64::to_bits));
+        assert_eq!(
+            back.r_torque.map(f64::to_bits),
+            h.r_torque.map(f64::to_bits)
+        );
     }
 
     /// Only the all-+0.0 history counts as zero: a -0.0 component is a bit set.

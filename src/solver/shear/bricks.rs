@@ -3,8 +3,8 @@
 //! whose wrapped position lies in it and holds as ghosts every other particle within the cutoff
 //! of it, periodic images included, all in increasing id: the order that makes a brick's pair
 //! sums one process's bits (`bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process`).
-//! Sums over particles (the plate forces) are made in id order over every brick's share
-//! ([`sum_in_id_order`]), as one process makes them.
+//! Sums over particles (the plate forces) are exact ([`super::exact`]): any split gives
+//! one process's bits.
 
 use crate::solver::vec3::V3;
 
@@ -80,33 +80,6 @@ impl Bricks {
         }
         (ids, own)
     }
-}
-
-/// The sums (bottom, top) of per-particle plate forces held by several bricks, each share
-/// `(id, bottom, top)` of its own particles: made over all shares in increasing id, as one
-/// process sums its particles in order (`ShearSim::plate_forces_over`), so the bits do not
-/// depend on the split. A particle in two shares is a bug of the caller (panics).
-pub fn sum_in_id_order(shares: &[Vec<(u32, V3, V3)>]) -> (V3, V3) {
-    let mut all: Vec<&(u32, V3, V3)> = shares.iter().flatten().collect();
-    all.sort_by_key(|e| e.0);
-    assert!(
-        all.windows(2).all(|w| w[0].0 < w[1].0),
-        "a particle in two bricks' shares"
-    );
-    sum_in_order(all.into_iter().map(|(_, b, t)| (*b, *t)))
-}
-
-/// The sums (bottom, top) of per-particle plate forces in the order given (one process's:
-/// increasing id), component by component as `ShearSim::plate_forces_over` adds them.
-pub fn sum_in_order(terms: impl Iterator<Item = (V3, V3)>) -> (V3, V3) {
-    let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
-    for (b, t) in terms {
-        for c in 0..3 {
-            tb[c] += b[c];
-            tt[c] += t[c];
-        }
-    }
-    (tb, tt)
 }
 
 #[cfg(test)]

@@ -21,11 +21,13 @@
 //!   members in two bricks is computed in both (LIGGGHTS' newton off) from equal inputs, so
 //!   both copies of its history stay equal. Pairs of two ghosts are not listed.
 //! - **Every step**: the drift (a ghost's drift is discarded), the ghosts' positions and
-//!   velocities sent by their owners (`forward`), the plates moved (identically in every
-//!   brick), the skin/2 test OR-ed over the bricks, forces for the own particles, the plate
-//!   forces summed over every brick's share in increasing id (the order one process sums
-//!   them: [`sum_in_id_order`]), the final half-kick, and the servo (identically in every
-//!   brick, from the same sums).
+//!   velocities sent by their owners to the bricks that hold them (`forward`: messages to
+//!   neighbouring bricks only), the skin/2 test summed over the bricks (an all-reduce of one
+//!   word), the plates moved (identically in every brick), forces for the own particles, the
+//!   plate forces summed exactly by each brick over its own particles and over the bricks by
+//!   an all-reduce of a few hundred bytes (any order gives one process's bits:
+//!   [`super::exact`]), the final half-kick, and the servo (identically in every brick, from
+//!   the same sums).
 //! - **A rebuild** wraps the own particles, sends each one whose owner changed to its new
 //!   brick with every per-particle state it carries (velocities, force, torque, rotation,
 //!   plate contact records) and the histories of its pairs (`migrate`), then each brick
@@ -39,6 +41,7 @@
 //! one decomposition resumes on another to the same bits.
 
 use super::bricks::Bricks;
+use super::exact::{PlateSum, LIMB_LEN};
 use super::neighbor::{Carried, Members, NeighborList, Pair};
 use super::{PairState, ShearSim, WallSlots};
 use crate::error::{Error, Result};
@@ -60,9 +63,13 @@ pub trait Transport {
     /// All-to-all: `out[s]` is delivered to rank `s`; returns what each rank sent to this
     /// one, by sender (this rank's own `out[rank]` included).
     fn exchange<T: Wire>(&self, out: Vec<T>) -> Vec<T>;
-    /// [`Transport::exchange`] of numbers whose counts the receiver knows (`expect[r]` from
-    /// rank r): the per-step messages, sent as they are (one `MPI_Alltoallv`, no encoding).
-    fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>>;
+    /// The per-step messages, numbers sent as they are to the ranks they are for only:
+    /// `out[r]` to rank r (nothing when empty); `got[r]` filled from rank r, its length (what
+    /// rank r sends, fixed at a rebuild) known in advance. The buffers are the caller's,
+    /// reused from step to step. MPI: point-to-point, no encoding.
+    fn exchange_f64(&self, out: &[Vec<f64>], got: &mut [Vec<f64>]);
+    /// All-reduce: `words` added word by word (wrapping) over every rank, on every rank.
+    fn sum_u64(&self, words: &mut [u64]);
     /// What this rank's calls have carried so far, where the transport counts it (MPI);
     /// None where it does not (bricks as threads move values without encoding them).
     fn traffic(&self) -> Option<Traffic> {
@@ -171,11 +178,18 @@ impl Transport for InProcess {
         got
     }
 
-    fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>> {
-        let got = self.exchange(out);
-        let lengths: Vec<usize> = got.iter().map(Vec::len).collect();
-        assert_eq!(lengths, expect, "messages of the lengths expected");
-        got
+    fn exchange_f64(&self, out: &[Vec<f64>], got: &mut [Vec<f64>]) {
+        for (g, m) in got.iter_mut().zip(self.exchange(out.to_vec())) {
+            assert_eq!(g.len(), m.len(), "a message of the length expected");
+            g.copy_from_slice(&m);
+        }
+    }
+
+    fn sum_u64(&self, words: &mut [u64]) {
+        let all = self.exchange(vec![words.to_vec(); self.size]);
+        for (k, w) in words.iter_mut().enumerate() {
+            *w = all.iter().fold(0u64, |a, v| a.wrapping_add(v[k]));
+        }
     }
 }
 
@@ -199,14 +213,10 @@ pub struct Link {
 pub fn probe_link(t: &impl Transport) -> Link {
     let others = t.size().saturating_sub(1).max(1) as f64;
     let per_call = |len: usize, calls: usize| {
-        let mut expect = vec![len; t.size()];
-        expect[t.rank()] = 0;
-        let out = || {
-            let mut out = vec![vec![0.5; len]; t.size()];
-            out[t.rank()] = Vec::new();
-            out
-        };
-        let go = || t.exchange_f64(out(), &expect);
+        let mut out = vec![vec![0.5; len]; t.size()];
+        out[t.rank()] = Vec::new();
+        let mut got = out.clone();
+        let mut go = || t.exchange_f64(&out, &mut got);
         go();
         let t0 = std::time::Instant::now();
         for _ in 0..calls {
@@ -343,44 +353,6 @@ struct Whole {
 /// at the last force evaluation (what the records count).
 type GlobalPair = (Pair, ContactHistory, PairState);
 
-/// Who adds what to the plate forces between two rebuilds: every brick's own particles with
-/// plate candidates (fixed at a rebuild), so that each step sends their forces alone, in an
-/// order every brick knows, and every brick sums them in increasing id.
-#[derive(Clone, Debug, Default)]
-struct PlatePlan {
-    /// This brick's own particles with candidates (local indices, increasing id).
-    mine: Vec<u32>,
-    /// How many each rank sends.
-    counts: Vec<usize>,
-    /// Every such particle in increasing id: (rank, its place in that rank's list).
-    order: Vec<(u32, u32)>,
-}
-
-impl PlatePlan {
-    /// The plan from each rank's ids of own particles with candidates (increasing).
-    fn new(mine: Vec<u32>, ids_by_rank: &[Vec<u32>]) -> Self {
-        let mut order: Vec<(u32, u32, u32)> = ids_by_rank
-            .iter()
-            .enumerate()
-            .flat_map(|(r, ids)| {
-                ids.iter()
-                    .enumerate()
-                    .map(move |(k, &id)| (id, r as u32, k as u32))
-            })
-            .collect();
-        order.sort_unstable();
-        assert!(
-            order.windows(2).all(|w| w[0].0 < w[1].0),
-            "a particle owned by two bricks"
-        );
-        PlatePlan {
-            mine,
-            counts: ids_by_rank.iter().map(Vec::len).collect(),
-            order: order.into_iter().map(|(_, r, k)| (r, k)).collect(),
-        }
-    }
-}
-
 /// One brick of a decomposed shear simulation.
 pub struct Brick {
     sim: ShearSim,
@@ -392,8 +364,12 @@ pub struct Brick {
     send: Vec<Vec<u32>>,
     /// Per rank, the local indices of the ghosts it owns, in the order it sends them.
     recv: Vec<Vec<u32>>,
-    /// The plate forces' plan, fixed from one rebuild to the next: see [`PlatePlan`].
-    plates: PlatePlan,
+    /// Own particles with plate candidates (local indices, fixed from one rebuild to the
+    /// next): the terms of this brick's plate force sum.
+    plates: Vec<u32>,
+    /// `forward`'s messages, per rank (reused from step to step).
+    out: Vec<Vec<f64>>,
+    got: Vec<Vec<f64>>,
     /// Particles that arrived from other bricks at rebuilds (a statistic for tests).
     pub arrived: u64,
 }
@@ -483,15 +459,8 @@ impl Brick {
                 recv[bricks.owner(held[q])].push(l as u32);
             }
         }
-        // every brick's own particles with plate candidates, from the whole state
-        let mut ids_by_rank = vec![Vec::new(); bricks.count()];
-        for (q, p) in held.iter().enumerate() {
-            if global.has_plate_candidates(q) {
-                ids_by_rank[bricks.owner(*p)].push(q as u32);
-            }
-        }
-        let plates = PlatePlan::new(own_with_candidates(&sim), &ids_by_rank);
-        Brick {
+        let plates = own_with_candidates(&sim);
+        let mut b = Brick {
             sim,
             bricks,
             me,
@@ -499,8 +468,20 @@ impl Brick {
             send,
             recv,
             plates,
+            out: Vec::new(),
+            got: Vec::new(),
             arrived: 0,
-        }
+        };
+        b.size_messages();
+        b
+    }
+
+    /// `forward`'s buffers for the send and receive lists of the last rebuild: 9 numbers
+    /// per ghost (position, velocity, angular velocity).
+    fn size_messages(&mut self) {
+        let sized = |lists: &[Vec<u32>]| lists.iter().map(|l| vec![0.0; 9 * l.len()]).collect();
+        self.out = sized(&self.send);
+        self.got = sized(&self.recv);
     }
 
     /// A run's setup ([`ShearSim::setup`]) in every brick: the stage speed, a rebuild, and
@@ -532,32 +513,23 @@ impl Brick {
     }
 
     /// The ghosts' positions and velocities from their owners (LAMMPS `forward_comm`), after
-    /// the drift: what the pair pass reads of them; with them each brick's `moved` (the
-    /// skin/2 test of its own particles): true when any brick's is.
+    /// the drift: what the pair pass reads of them (messages between neighbouring bricks
+    /// only); with them each brick's `moved` (the skin/2 test of its own particles): true
+    /// when any brick's is (an all-reduce).
     fn forward(&mut self, t: &impl Transport, moved: bool) -> bool {
         let s = &self.sim;
-        let out: Vec<Vec<f64>> = self
-            .send
-            .iter()
-            .map(|list| {
-                let mut buf = Vec::with_capacity(1 + 9 * list.len());
-                buf.push(f64::from(u8::from(moved)));
-                for &l in list {
-                    let l = l as usize;
-                    buf.extend_from_slice(&s.x[l]);
-                    buf.extend_from_slice(&s.v[l]);
-                    buf.extend_from_slice(&s.omega[l]);
-                }
-                buf
-            })
-            .collect();
-        let expect: Vec<usize> = self.recv.iter().map(|l| 1 + 9 * l.len()).collect();
-        let got = t.exchange_f64(out, &expect);
+        for (buf, list) in self.out.iter_mut().zip(&self.send) {
+            for (rec, &l) in buf.chunks_exact_mut(9).zip(list) {
+                let l = l as usize;
+                rec[..3].copy_from_slice(&s.x[l]);
+                rec[3..6].copy_from_slice(&s.v[l]);
+                rec[6..].copy_from_slice(&s.omega[l]);
+            }
+        }
+        t.exchange_f64(&self.out, &mut self.got);
         let s = &mut self.sim;
-        let mut any = false;
-        for (list, buf) in self.recv.iter().zip(&got) {
-            any |= buf[0] != 0.0;
-            for (&l, rec) in list.iter().zip(buf[1..].chunks_exact(9)) {
+        for (list, buf) in self.recv.iter().zip(&self.got) {
+            for (&l, rec) in list.iter().zip(buf.chunks_exact(9)) {
                 let l = l as usize;
                 s.x[l] = [rec[0], rec[1], rec[2]];
                 s.v[l] = [rec[3], rec[4], rec[5]];
@@ -567,35 +539,32 @@ impl Brick {
                 }
             }
         }
-        any
+        let mut any = [u64::from(moved)];
+        t.sum_u64(&mut any);
+        any[0] != 0
     }
 
-    /// The plate forces of this evaluation, summed over every brick's own particles with
-    /// plate candidates in increasing id (one process's order and bits), kept as the plates'
-    /// forces; `local` is this brick's force evaluation (true when it kicked). An error
-    /// anywhere is an error everywhere.
+    /// The plate forces of this evaluation: this brick's exact sum over its own particles
+    /// with plate candidates, added over the bricks by one all-reduce of its limbs (any
+    /// order gives one process's bits: [`super::exact`]), kept as the plates' forces;
+    /// `local` is this brick's force evaluation (true when it kicked), its failure counted
+    /// in the same all-reduce: an error anywhere is an error everywhere.
     fn plate_forces(&mut self, t: &impl Transport, local: Result<bool>) -> Result<bool> {
         let s = &self.sim;
-        let mut share = Vec::with_capacity(1 + 6 * self.plates.mine.len());
-        share.push(f64::from(u8::from(local.is_err())));
-        for &q in &self.plates.mine {
-            let (b, tp) = s.wall_force[q as usize];
-            share.extend_from_slice(&b);
-            share.extend_from_slice(&tp);
-        }
-        let expect: Vec<usize> = self.plates.counts.iter().map(|c| 1 + 6 * c).collect();
-        let got = t.exchange_f64(vec![share; t.size()], &expect);
+        let mine = super::exact::sum(self.plates.iter().map(|&q| s.wall_force[q as usize]));
+        let mut words = [0u64; LIMB_LEN + 1];
+        words[..LIMB_LEN].copy_from_slice(&mine.limbs());
+        words[LIMB_LEN] = u64::from(local.is_err());
+        t.sum_u64(&mut words);
         self.sim.lap(|p| &mut p.comm);
-        if got.iter().any(|g| g[0] != 0.0) {
+        if words[LIMB_LEN] != 0 {
             // rare: say why, every brick
             let said = all_gather(t, local.as_ref().err().map(|e| e.to_string()));
             return agree(local, said, self.sim.step);
         }
-        let (tb, tt) = super::bricks::sum_in_order(self.plates.order.iter().map(|&(r, k)| {
-            let f = &got[r as usize][1 + 6 * k as usize..][..6];
-            ([f[0], f[1], f[2]], [f[3], f[4], f[5]])
-        }));
-        self.sim.keep_plate_forces(tb, tt)?;
+        let mut limbs = [0u64; LIMB_LEN];
+        limbs.copy_from_slice(&words[..LIMB_LEN]);
+        self.sim.keep_plate_forces(PlateSum::from_limbs(&limbs))?;
         local
     }
 
@@ -622,9 +591,8 @@ impl Brick {
         };
         s.nl.build_over(&team, &s.x, &s.radius, s.skin, s.box_, over, carried);
         s.after_list(&team);
-        let mine = own_with_candidates(s);
-        let ids: Vec<u32> = mine.iter().map(|&l| s.ids[l as usize]).collect();
-        self.plates = PlatePlan::new(mine, &all_gather(t, ids));
+        self.plates = own_with_candidates(s);
+        self.size_messages();
         Ok(())
     }
 

@@ -7,11 +7,13 @@
 //!
 //! Parallel and reproducible: pairs are evaluated in parallel, each writing only its own
 //! history and force slot; particles then sum their pair forces in pair order (CSR) and their
-//! plate contacts in feature order; plate totals are summed in particle order. Results are
-//! bit-identical for any number of threads (tested).
+//! plate contacts in feature order; plate totals are summed exactly ([`exact`]: any order,
+//! any split over threads or ranks gives the same bits). Results are bit-identical for any
+//! number of threads (tested).
 
 pub mod bricks;
 pub mod decompose;
+pub mod exact;
 mod implicit;
 #[cfg(feature = "mpi")]
 pub mod mpi;
@@ -775,10 +777,10 @@ impl ShearSim {
                 &self.acc,
                 &walls,
             );
-            let Some((tb, tt)) = totals else {
+            let Some(total) = totals else {
                 return Err(too_many_wall_contacts(self.step));
             };
-            return self.keep_plate_forces(tb, tt).map(|_| false);
+            return self.keep_plate_forces(total).map(|_| false);
         }
         let imps = if implicit {
             split_mut(&mut self.imp, th)
@@ -876,17 +878,15 @@ impl ShearSim {
 
     /// Sums the plate forces of every particle with plate candidates (`wall_force`) and
     /// keeps them ([`Self::keep_plate_forces`]); the particles without candidates would add
-    /// +0, which changes no bit.
+    /// nothing.
     fn keep_plate_forces_summed(&mut self) -> Result<()> {
         let ws = &self.wall_start;
         let with_candidates = (0..self.wall_force.len()).filter(|&q| ws[q] != ws[q + 1]);
-        let (tb, tt) = self.plate_forces_over(with_candidates);
-        self.keep_plate_forces(tb, tt)
+        self.keep_plate_forces(self.plate_forces_over(with_candidates))
     }
 
     /// [`Self::keep_plate_forces_summed`] over the particles with a plate contact only,
-    /// from `hits` (each thread's in particle order, the threads' in share order: particle
-    /// order): the others add +0, which changes no bit. Measured on the fast state (2
+    /// from `hits`: the others add nothing. Measured on the fast state (2
     /// threads): the serial sum over every particle cost 2.3-2.7 us per step, 1.3 %.
     fn keep_plate_forces_of(&mut self, hits: &[Vec<walls::WallHit>]) -> Result<()> {
         let mut last = None;
@@ -895,29 +895,32 @@ impl ShearSim {
             last = Some(h.q);
             new.then_some(h.q as usize)
         });
-        let (tb, tt) = self.plate_forces_over(touching);
-        self.keep_plate_forces(tb, tt)
+        let total = self.plate_forces_over(touching);
+        self.keep_plate_forces(total)
     }
 
-    /// The sums of the bottom and top plate forces (`wall_force`) of particles `qs`, in
-    /// their order.
-    fn plate_forces_over(&self, qs: impl Iterator<Item = usize>) -> (V3, V3) {
-        let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
-        for q in qs {
-            let (b, t) = &self.wall_force[q];
-            for c in 0..3 {
-                tb[c] += b[c];
-                tt[c] += t[c];
-            }
-        }
-        (tb, tt)
+    /// The exact sum ([`exact::PlateSum`]: any order gives its bits) of the bottom and top
+    /// plate forces (`wall_force`) of particles `qs`.
+    fn plate_forces_over(&self, qs: impl Iterator<Item = usize>) -> exact::PlateSum {
+        exact::sum(qs.map(|q| self.wall_force[q]))
     }
 
-    /// Keeps the plate forces (bottom, top) of this evaluation; ends the force phase.
-    fn keep_plate_forces(&mut self, tb: V3, tt: V3) -> Result<()> {
+    /// Keeps the plate forces (bottom, top) of this evaluation, the exact sum of the
+    /// particles' shares rounded once; ends the force phase. A share that is not finite or
+    /// beyond [`exact::MAX_SHARE`] is an error.
+    fn keep_plate_forces(&mut self, total: exact::PlateSum) -> Result<()> {
+        self.lap(|p| &mut p.sum_walls);
+        let Some((tb, tt)) = total.totals() else {
+            return Err(Error::Solver {
+                step: self.step,
+                msg: format!(
+                    "a plate force that is not finite or beyond {:.1e} N",
+                    exact::MAX_SHARE
+                ),
+            });
+        };
         self.bottom_force = tb;
         self.top_force = tt;
-        self.lap(|p| &mut p.sum_walls);
         if !(tt.iter().chain(tb.iter()).all(|v| v.is_finite())) {
             return Err(Error::Solver {
                 step: self.step,
@@ -938,9 +941,8 @@ fn too_many_wall_contacts(step: u64) -> Error {
 
 /// One thread without dashpot sums: the pair sums are the particles' forces (`0 + a` is `a`
 /// bit for bit: a sum started at +0 is never -0), and only the particles with plate
-/// candidates (about 11 % on the fast state) are visited, their plate forces added in
-/// particle order as [`team_sums`] adds them (the other particles add +0, which changes no
-/// bit). Measured on the fast state (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per
+/// candidates (about 11 % on the fast state) are visited, their plate forces added to the
+/// exact sum ([`exact::PlateSum`]). Measured on the fast state (1 thread, avx512): sums + walls 30-33 -> 23-24 ns per
 /// particle-step. Returns the plate totals (bottom, top), each particle's contributions kept
 /// in `wall_force` (a brick's share of the plate forces, [`decompose`]), or None when a
 /// particle would hold too many plate contacts.
@@ -951,12 +953,12 @@ fn serial_sums(
     wall_force: &mut [(V3, V3)],
     acc: &[ForceData],
     walls: &walls::WallContext,
-) -> Option<(V3, V3)> {
+) -> Option<exact::PlateSum> {
     for ((f, t), a) in f.iter_mut().zip(torque.iter_mut()).zip(acc) {
         *f = a.delta_f;
         *t = a.delta_torque;
     }
-    let (mut tb, mut tt) = ([0.0; 3], [0.0; 3]);
+    let mut total = exact::PlateSum::default();
     let mut none = ([0.0; 6], [0.0; 3]);
     for q in 0..f.len() {
         if walls.cstart[q] == walls.cstart[q + 1] {
@@ -966,12 +968,9 @@ fn serial_sums(
         if !walls.particle(q, &mut wall[q], &mut f[q], &mut torque[q], wf, &mut none) {
             return None;
         }
-        for c in 0..3 {
-            tb[c] += wf.0[c];
-            tt[c] += wf.1[c];
-        }
+        total.add(wf.0, wf.1);
     }
-    Some((tb, tt))
+    Some(total)
 }
 
 /// One team member's share of the per-particle outputs of the sums region.

@@ -1,15 +1,21 @@
 //! The MPI transport of a decomposed run (issue #39, the `mpi` feature): the bricks'
 //! [`Transport`] over a communicator of rsmpi (the `mpi` crate, over the system's MPI).
-//! An exchange is one `MPI_Alltoall` of the message sizes and one `MPI_Alltoallv` of the
-//! messages, each encoded as MessagePack (every f64 as its 64 bits: the bricks' bits travel
-//! unchanged).
+//! A rebuild's exchange is one `MPI_Alltoall` of the message sizes and one `MPI_Alltoallv`
+//! of the messages, each encoded as MessagePack (every f64 as its 64 bits: the bricks' bits
+//! travel unchanged); a step's ghost messages are nonblocking point-to-point messages between
+//! neighbouring bricks (`MPI_Isend` / `MPI_Irecv`, numbers as they are), its sums one
+//! `MPI_Allreduce` (MPI_SUM of 64-bit words).
 
 use super::decompose::{Traffic, Transport, Wire};
+use mpi::collective::SystemOperation;
 use mpi::datatype::{Partition, PartitionMut};
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
+
+/// The tag of a step's ghost messages.
+const STEP_TAG: i32 = 39;
 
 /// A communicator's ranks as bricks.
 pub struct Mpi {
@@ -129,22 +135,68 @@ impl Transport for Mpi {
             .collect()
     }
 
-    fn exchange_f64(&self, out: Vec<Vec<f64>>, expect: &[usize]) -> Vec<Vec<f64>> {
+    fn exchange_f64(&self, out: &[Vec<f64>], got: &mut [Vec<f64>]) {
         let t0 = Instant::now();
+        let me = self.rank();
         assert_eq!(out.len(), self.size(), "one message per rank");
-        let sent = counts(out.iter().map(Vec::len));
-        let got_counts = counts(expect.iter().copied());
-        let got = all_to_all(&self.world, &out.concat(), &sent, &got_counts);
+        got[me].copy_from_slice(&out[me]);
+        // the ranks received from, in the order their requests are added
+        let from: Vec<(usize, usize)> = got
+            .iter()
+            .enumerate()
+            .filter(|&(r, b)| r != me && !b.is_empty())
+            .map(|(r, b)| (r, b.len()))
+            .collect();
+        let mut done = Vec::new();
+        // nonblocking receives and sends with the ranks that have a message, then wait for
+        // all (the counts are fixed at a rebuild on both sides: a short message is a bug,
+        // checked from the receives' status; a long one is an MPI error)
+        mpi::request::multiple_scope(2 * out.len(), |scope, all| {
+            for (r, buf) in got.iter_mut().enumerate() {
+                if r != me && !buf.is_empty() {
+                    let rank = self.world.process_at_rank(r as i32);
+                    all.add(rank.immediate_receive_into_with_tag(scope, &mut buf[..], STEP_TAG));
+                }
+            }
+            for (r, buf) in out.iter().enumerate() {
+                if r != me && !buf.is_empty() {
+                    let rank = self.world.process_at_rank(r as i32);
+                    all.add(rank.immediate_send_with_tag(scope, &buf[..], STEP_TAG));
+                }
+            }
+            all.wait_all(&mut done);
+        });
+        for (k, status, _) in &done {
+            if let Some(&(r, len)) = from.get(*k) {
+                let n = status.count(f64::equivalent_datatype());
+                assert_eq!(
+                    n as usize, len,
+                    "a step message from rank {r} of the length expected"
+                );
+            }
+        }
         self.meter
             .add(t0, out.iter().map(|m| 8 * m.len()), self.rank());
-        let mut at = 0;
-        expect
-            .iter()
-            .map(|&n| {
-                at += n;
-                got[at - n..at].to_vec()
-            })
-            .collect()
+    }
+
+    fn sum_u64(&self, words: &mut [u64]) {
+        let t0 = Instant::now();
+        let mine = words.to_vec();
+        self.world
+            .all_reduce_into(&mine[..], words, SystemOperation::sum());
+        // counted as one message of the words to one other rank (what 2 ranks send)
+        let bytes = 8 * words.len();
+        self.meter.add(
+            t0,
+            (0..self.size()).map(|r| {
+                if r == (self.rank() + 1) % self.size() {
+                    bytes
+                } else {
+                    0
+                }
+            }),
+            self.rank(),
+        );
     }
 
     fn traffic(&self) -> Option<Traffic> {
