@@ -49,19 +49,13 @@ fn snapshots_load_in_vtk_with_their_fields_count_and_time() {
     common::liggghts();
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let o = common::short_ci_shear(
-        &out,
-        &[
-            "--snapshot-every",
-            "4000",
-            "--mu-margin",
-            "0.5",
-            "--stress-rtol",
-            "0.5",
-        ],
-    );
+    let o = common::short_ci_shear(&out, &["--snapshot-every", "4000", "--mu-margin", "0.5"]);
     let t = text(&o);
-    assert!(matches!(o.status.code(), Some(0) | Some(1)), "{t}");
+    // any verdict: this test reads the snapshots
+    assert!(
+        matches!(o.status.code(), Some(0) | Some(1) | Some(3)),
+        "{t}"
+    );
     assert!(
         t.contains("particle snapshots for ParaView every 4000 steps (6.000e-3 s)"),
         "{t}"
