@@ -48,6 +48,8 @@ fn main() -> ExitCode {
     };
     // diagnostics on request only: RUST_LOG=trace (every particle-plate contact), =debug, ...
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("off")).init();
+    // what the library says (a command's account, warnings, progress) goes to the terminal
+    dem_verify::cli::console::install();
     let matches = match Cli::command().try_get_matches() {
         Ok(m) => m,
         Err(e) => {

@@ -201,11 +201,11 @@ fn load_checkpoint(out: &Path, case_json: &str) -> Option<NativeCheckpoint> {
     let refuse = |why: String| {
         let kept = out.join("native_checkpoint.rejected");
         let _ = std::fs::rename(&path, &kept);
-        eprintln!(
-            "note: {} is not resumed: {why}; the run starts over (the file is kept as {})",
+        crate::run::tell::note(&format!(
+            "{} is not resumed: {why}; the run starts over (the file is kept as {})",
             path.display(),
             kept.display()
-        );
+        ));
         None
     };
     let payload = match crate::fsutil::unseal(
@@ -344,14 +344,14 @@ fn step_native<R>(
             unreachable!("a run or a bench was handed out")
         };
         let bricks = split_for(world.size(), case.box_x, case.box_z);
-        eprintln!(
+        crate::run::tell::note(&format!(
             "native run decomposed over {} MPI ranks: {} x {} bricks along x and z, {} \
              thread(s) each",
             world.size(),
             bricks.nx,
             bricks.nz,
             job.threads
-        );
+        ));
         let mut stepper = BrickRun {
             brick: Brick::of(&job.sim, bricks, 0),
             transport: &world,
@@ -387,7 +387,8 @@ pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
         {
             Ok(pool) => pool,
             Err(e) => {
-                // this rank cannot take part: end it, and mpirun ends the others
+                // this rank cannot take part: end it, and mpirun ends the others (a serving
+                // rank has no sink: its last word goes to stderr itself)
                 eprintln!("error: rank {}: no thread pool: {e}", world.rank());
                 std::process::exit(2);
             }
@@ -810,11 +811,11 @@ pub fn run_liggghts(
                 .map_err(|e| Error::io(dir.join(LOG_NAME), e))?;
             state.earlier.push((part, state.current_from));
             state.current_from = step;
-            eprintln!(
+            crate::run::tell::note(&format!(
                 "LIGGGHTS seed {}: continuing from its restart file at step {step} (from there \
                  on not bit-identical to an uninterrupted run)",
                 case.seed
-            );
+            ));
             shear_deck_with(
                 case,
                 packing,

@@ -424,3 +424,101 @@ fn components(g: &BTreeMap<PathBuf, BTreeSet<PathBuf>>) -> Vec<Vec<PathBuf>> {
     }
     t.out
 }
+
+/// The print macros a file's library code (its test code left out) invokes.
+struct Prints {
+    found: Vec<String>,
+}
+
+impl<'ast> syn::visit::Visit<'ast> for Prints {
+    fn visit_item_mod(&mut self, m: &'ast syn::ItemMod) {
+        if !is_test(&m.attrs) {
+            syn::visit::visit_item_mod(self, m);
+        }
+    }
+
+    fn visit_item_fn(&mut self, f: &'ast syn::ItemFn) {
+        if !is_test(&f.attrs) && !f.attrs.iter().any(|a| a.path().is_ident("test")) {
+            syn::visit::visit_item_fn(self, f);
+        }
+    }
+
+    fn visit_macro(&mut self, m: &'ast syn::Macro) {
+        let name = m.path.segments.last().map(|s| s.ident.to_string());
+        if let Some(n) = name.filter(|n| PRINTS.contains(&n.as_str())) {
+            self.found.push(format!("{n}!"));
+        }
+        // inside a macro's tokens (a `macro_rules!` body, another macro's arguments)
+        self.tokens(m.tokens.clone());
+        syn::visit::visit_macro(self, m);
+    }
+}
+
+const PRINTS: [&str; 5] = ["println", "eprintln", "print", "eprint", "dbg"];
+
+impl Prints {
+    fn tokens(&mut self, ts: proc_macro2::TokenStream) {
+        let tt: Vec<proc_macro2::TokenTree> = ts.into_iter().collect();
+        for (k, t) in tt.iter().enumerate() {
+            match t {
+                proc_macro2::TokenTree::Group(g) => self.tokens(g.stream()),
+                proc_macro2::TokenTree::Ident(id)
+                    if PRINTS.contains(&id.to_string().as_str())
+                        && matches!(tt.get(k + 1), Some(proc_macro2::TokenTree::Punct(p)) if p.as_char() == '!') =>
+                {
+                    self.found.push(format!("{id}! (in a macro)"));
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Only the command layer writes to the terminal (issue #38): the library says what it has
+/// to say through `run::tell` (lines, warnings, notes, progress), and `verify` shows it
+/// (cli/console.rs). One exception: a serving MPI rank (no sink) that cannot start says why
+/// on stderr before it ends.
+#[test]
+fn only_the_command_layer_prints() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let allowed: [(&str, usize); 1] = [("shear.rs", 1)];
+    let mut offenders = Vec::new();
+    let mut seen_allowed = 0;
+    let mut cli_prints = 0;
+    for f in &files {
+        let rel = f.strip_prefix(&src).unwrap().display().to_string();
+        let file = syn::parse_file(&std::fs::read_to_string(f).unwrap()).unwrap();
+        let mut p = Prints { found: Vec::new() };
+        syn::visit::Visit::visit_file(&mut p, &file);
+        if rel.starts_with("cli/") || rel == "main.rs" {
+            cli_prints += p.found.len();
+            continue;
+        }
+        // test code in files of their own
+        if rel.ends_with("/tests.rs") {
+            continue;
+        }
+        match allowed.iter().find(|(a, _)| *a == rel) {
+            Some((_, n)) if p.found.len() == *n => seen_allowed += 1,
+            _ if p.found.is_empty() => {}
+            _ => offenders.push(format!("{rel}: {}", p.found.join(", "))),
+        }
+    }
+    // the visitor must see prints where they are (a reader that finds none passes nothing)
+    assert!(
+        cli_prints >= 5,
+        "prints read in cli/ and main.rs: {cli_prints}"
+    );
+    assert!(
+        offenders.is_empty(),
+        "the library prints (say it through run::tell instead):\n{}",
+        offenders.join("\n")
+    );
+    assert_eq!(
+        seen_allowed,
+        allowed.len(),
+        "an allowed print is gone: take it off the list"
+    );
+}

@@ -4,6 +4,7 @@
 pub mod args;
 pub mod bench;
 pub mod chung_ooi;
+pub mod console;
 pub mod contact;
 pub mod convergence;
 pub mod nightly;

@@ -9,6 +9,7 @@ use crate::report::html::{table, text, text_rows, Cell, Page};
 use crate::report::plot::{line_plot, log_error_plot, Curve, CurveData};
 use crate::run::history::Record;
 use crate::run::nightly_outcome::{CodeStats, NightlySummary, ShearRow};
+use crate::run::tell::say;
 use maud::{html, Markup};
 use std::path::Path;
 
@@ -89,7 +90,7 @@ impl crate::run::nightly::Figures for NightFigures {
         if ran {
             crate::report::replay::plot(out, o)?;
         }
-        print!("{}", crate::report::replay::table(o));
+        say!("{}", crate::report::replay::table(o).trim_end_matches('\n'));
         Ok(())
     }
 }
@@ -102,13 +103,13 @@ pub fn write_page(night: crate::run::nightly::Night, out: &Path) -> Result<Night
     write_atomic(&page, html.as_bytes())?;
     let s = &night.summary;
     match &s.rejudged {
-        Some(by) => println!(
+        Some(by) => say!(
             "nightly of {} judged again by {by}: {}; report {}",
             s.date_utc,
             format!("{:?}", s.verdict()).to_lowercase(),
             page.display()
         ),
-        None => println!(
+        None => say!(
             "\nnightly {}: {} contact runs, {} shear cases, {:.0} s; report {}",
             if s.pass { "PASS" } else { "FAIL" },
             s.contact.len(),

@@ -2,17 +2,13 @@
 //! and of a study: the run layer's outcome as text.
 
 use crate::run::shear::{SeedResult, ShearSummary};
+use crate::run::tell::say;
 use std::path::Path;
 
 /// Prints a study's steady figures, paired differences and verdicts.
 pub fn print_summary(summary: &ShearSummary, out: &Path) {
     let (ls, ns) = (&summary.liggghts, &summary.native);
     let window = summary.steady_window_steps;
-    macro_rules! say {
-        ($($t:tt)*) => {
-            println!($($t)*)
-        };
-    }
     say!();
     say!(
         "steady window: steps {}..{} (second half of the last stage)",
@@ -132,17 +128,17 @@ pub fn print_seed(s: &SeedResult) {
             s.native_particle_steps_per_s.unwrap_or(0.0)
         );
     }
-    println!("{line}");
+    say!("{line}");
     if let Some(h) = &s.horizon {
         match (&h.first_diverge_step, &h.first_diverge_channel) {
-            (Some(st), Some(ch)) => println!(
+            (Some(st), Some(ch)) => say!(
                 "    lockstep: agree (rel {:.0e}) through step {} (compression {} steps, shear steps agreed {}); first divergence: {ch} at step {st}",
                 h.rtol,
                 h.last_agree_step,
                 s.compression_steps,
                 s.shear_steps_agreed.unwrap_or(0)
             ),
-            _ => println!("    lockstep: agree (rel {:.0e}) through the whole run (step {})", h.rtol, h.last_agree_step),
+            _ => say!("    lockstep: agree (rel {:.0e}) through the whole run (step {})", h.rtol, h.last_agree_step),
         }
     }
     for (what, h) in [
@@ -157,11 +153,11 @@ pub fn print_seed(s: &SeedResult) {
     ] {
         if let Some(h) = h {
             match (&h.first_diverge_step, &h.first_diverge_channel) {
-                (Some(st), Some(ch)) => println!(
+                (Some(st), Some(ch)) => say!(
                     "    {what}: agree through shear step {} (first divergence: {ch} at step {st})",
                     h.last_agree_step.saturating_sub(1)
                 ),
-                _ => println!(
+                _ => say!(
                     "    {what}: agree through all {} shear steps",
                     h.last_agree_step.saturating_sub(1)
                 ),

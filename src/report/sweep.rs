@@ -12,6 +12,7 @@ use crate::report::paper::{
 use crate::report::plot::{line_plot, Curve};
 use crate::run::convergence_outcome::{ConvergenceSummary, StudyCode};
 use crate::run::sweep::{collect, Manifest, RunResult};
+use crate::run::tell::say;
 use crate::run::Code;
 use maud::html;
 use serde::Serialize;
@@ -350,10 +351,10 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     crate::run::note_summary(&dir.join("report.json"));
     for (code, cs) in rep.conclusions.iter().chain(&rep.converged_conclusions) {
         for c in cs {
-            println!("  {code}: {} -> {} ({})", c.claim, c.verdict, c.evidence);
+            say!("  {code}: {} -> {} ({})", c.claim, c.verdict, c.evidence);
         }
     }
-    println!("report: {}", dir.join("report.html").display());
+    say!("report: {}", dir.join("report.html").display());
     if !missing.is_empty() {
         // the page is written (it shows what exists), but an incomplete sweep is not a
         // finished report: say so where scripts look, in the exit status

@@ -10,6 +10,7 @@ use crate::fsutil::write_atomic;
 use crate::liggghts::{last_loop_time, last_neighbor_builds, LOG_NAME};
 use crate::packing::{loose_packing, Packing};
 use crate::ranks::Timing;
+use crate::run::tell::say;
 use crate::shear::{bench_native, probe_ranks_link, Timed};
 use crate::solver::shear::decompose::{Link, Traffic};
 use crate::solver::shear::{compact, KernelPath, PhaseTimes};
@@ -285,7 +286,7 @@ fn print_row(r: &BenchRow) {
             } else {
                 String::new()
             };
-            println!(
+            say!(
                 "  native   {ranks}{} thread(s), {} kernel: {:8.2} s  {:.3e} particle-steps/s  \
                  ({:.3e} per core; CPU {})",
                 r.workers,
@@ -308,7 +309,7 @@ fn print_row(r: &BenchRow) {
                     .filter(|(name, sec)| *sec > 0.0 || *name != "communication")
                     .map(|(name, sec)| format!("{name} {:.1}", sec * per))
                     .collect();
-                println!(
+                say!(
                     "           ns per particle-step{}: {}",
                     if r.ranks > 1 { " (rank 0)" } else { "" },
                     parts.join(", ")
@@ -316,7 +317,7 @@ fn print_row(r: &BenchRow) {
             }
             if let Some(t) = &r.traffic {
                 let steps = r.steps as f64;
-                println!(
+                say!(
                     "           rank 0 exchanged {:.1} times, sent {:.1} messages and {:.1} kB per \
                      step, {:.1} us per step in exchanges",
                     t.calls as f64 / steps,
@@ -326,23 +327,28 @@ fn print_row(r: &BenchRow) {
                 );
             }
             if let Some(pp) = r.per_particle {
-                println!(
+                say!(
                     "           per particle: {:.2} listed pairs, {:.2} touching pairs, {:.3} \
                      plate contacts",
-                    pp.0, pp.1, pp.2
+                    pp.0,
+                    pp.1,
+                    pp.2
                 );
             }
             if let Some(b) = r.rebuilds {
-                println!("           {}", rebuild_line(b, r.steps));
+                say!("           {}", rebuild_line(b, r.steps));
             }
         }
         _ => {
-            println!(
+            say!(
                 "  LIGGGHTS {} process(es): {:8.2} s  {:.3e} particle-steps/s  ({:.3e} per core)",
-                r.workers, r.seconds, r.particle_steps_per_s, r.per_core
+                r.workers,
+                r.seconds,
+                r.particle_steps_per_s,
+                r.per_core
             );
             if let Some(b) = r.rebuilds {
-                println!("           {}", rebuild_line(b, r.steps));
+                say!("           {}", rebuild_line(b, r.steps));
             }
         }
     }
@@ -474,15 +480,17 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let out = a.out.clone();
     std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
     let rss0 = peak_rss();
-    println!(
+    say!(
         "verify bench: compacting the {} sample ({} particles, {} steps)...",
-        a.preset, base.particles, a.compression_steps
+        a.preset,
+        base.particles,
+        a.compression_steps
     );
     let loose = loose_packing(&base);
     let dense = compact(&base.setup(), &loose, a.compression_steps)?;
     let (case, state) = tile(&base, &dense, k);
     let n = state.radius.len();
-    println!(
+    say!(
         "  state: {n} particles ({k} x {k} tiles), {} timed steps per code, warm-up {} steps",
         a.steps,
         a.steps / 4
@@ -509,7 +517,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let mut link = if world > 1 {
         let l = probe_ranks_link();
         if let Some(l) = &l {
-            println!(
+            say!(
                 "  link between the {world} ranks: {:.2} us per message, {:.2} GB/s",
                 l.latency_s * 1e6,
                 1e-9 / l.seconds_per_byte.max(1e-15)
@@ -525,7 +533,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let mut scaling = None;
     for round in 0..a.rounds {
         if a.rounds > 1 {
-            println!("  round {} of {}", round + 1, a.rounds);
+            say!("  round {} of {}", round + 1, a.rounds);
         }
         if world > 1 || a.ranks.contains(&1) {
             for &kernel in &a.kernels {
@@ -583,7 +591,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         rss_native = match (before, peak_rss()) {
                             (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
                             _ => {
-                                println!(
+                                say!(
                                     "  (the peak resident set cannot be reset here: the memory \
                                      figure counts the input state and the compaction too)"
                                 );
@@ -618,7 +626,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     };
                     print_row(&row);
                     if world == 1 {
-                        println!(
+                        say!(
                             "           {:.1} % of the particles test {:.1} plate triangles each",
                             100.0 * cand.0 as f64 / n as f64,
                             cand.1 as f64 / cand.0.max(1) as f64
@@ -631,7 +639,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         if world == 1 {
             for &r in a.ranks.iter().filter(|&&r| r > 1) {
                 let dir = out.join(format!("ranks{r}_round{round}"));
-                println!(
+                say!(
                     "  native over {r} MPI ranks: `mpirun -np {r} verify bench` (log {})",
                     dir.join("bench.log").display()
                 );
@@ -775,28 +783,28 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         }
     };
     if let Some(x) = native_vs_liggghts_1 {
-        println!(
+        say!(
             "  native 1 thread / LIGGGHTS 1 process = {x:.2}{}",
             rounds(&report.rounds_native_vs_liggghts_1)
         );
     }
     if let Some(x) = native_2_vs_1 {
-        println!(
+        say!(
             "  native 2 threads / native 1 thread = {x:.2}{}",
             rounds(&report.rounds_native_2_vs_1)
         );
     }
     if let Some(x) = native_ranks_2_vs_1 {
-        println!(
+        say!(
             "  native 2 ranks x 1 thread / native 1 thread = {x:.2}{}",
             rounds(&report.rounds_native_ranks_2_vs_1)
         );
     }
     if let Some(x) = liggghts_2_vs_1 {
-        println!("  LIGGGHTS 2 processes / LIGGGHTS 1 process = {x:.2}");
+        say!("  LIGGGHTS 2 processes / LIGGGHTS 1 process = {x:.2}");
     }
     if let Some(b) = rss_native {
-        println!("  native memory: {b:.0} bytes per particle (peak RSS growth of the solver)");
+        say!("  native memory: {b:.0} bytes per particle (peak RSS growth of the solver)");
     }
     if !held_native.is_empty() {
         let total: f64 = held_native.iter().map(|(_, b)| b).sum();
@@ -805,20 +813,20 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             .filter(|(_, b)| *b > 0.0)
             .map(|(item, b)| format!("{item} {b:.0}"))
             .collect();
-        println!(
+        say!(
             "  held by the solver: {total:.0} bytes per particle ({})",
             parts.join(", ")
         );
     }
     for (who, hrs) in &report.paper_run_hours {
-        println!(
+        say!(
             "  estimated full paper run ({} steps x 2500 particles): {who}: {hrs:.1} h",
             paper.total_steps()
         );
     }
     if let Some(sc) = &report.scaling {
         for line in super::scaling::table(sc) {
-            println!("{line}");
+            say!("{line}");
         }
         // the model against what ran here: 2 ranks x 1 thread
         if let (Some(p2), Some(measured)) =
@@ -826,7 +834,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         {
             if let Some(pred) = p2.here_built_s {
                 let measured_s = n as f64 / measured;
-                println!(
+                say!(
                     "  model check, 2 ranks x 1 thread here: predicted {:.1} us per step, \
                      measured {:.1} us (measured / predicted {:.2})",
                     pred * 1e6,
@@ -841,6 +849,6 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
         serde_json::to_string_pretty(&report)?.as_bytes(),
     )?;
     super::note_summary(&out.join("bench.json"));
-    println!("bench.json: {}", out.join("bench.json").display());
+    say!("bench.json: {}", out.join("bench.json").display());
     Ok(report)
 }

@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::packing::loose_packing;
 use crate::run::progress::Progress;
+use crate::run::tell::say;
 use crate::series::Series;
 use crate::shear::{run_liggghts, run_native, write_series, Checkpointing, CHECKPOINT_EVERY};
 use crate::solver::shear::compact;
@@ -44,10 +45,10 @@ fn stored_series(dir: &Path, code: &str, hash: &str) -> Option<Series> {
         Ok(Some(_)) => Series::read_csv(&path).ok(),
         Ok(None) => None,
         Err(why) => {
-            eprintln!(
-                "warning: {} is not reused: {why}; run again",
+            crate::run::tell::warning(&format!(
+                "{} is not reused: {why}; run again",
                 path.display()
-            );
+            ));
             None
         }
     }
@@ -169,7 +170,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     };
     let out = sh.out.clone();
     let factors = a.factors();
-    println!(
+    say!(
         "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
         sh.case.preset,
         format!("{:?}", sh.engine).to_lowercase(),
@@ -190,7 +191,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         let hash = run_input_hash(&cc, code.keyword())?;
         let s = match stored_series(&dir, code.keyword(), &hash) {
             Some(s) => {
-                println!("  seed {seed}, dt factor {f}, {code}: current result kept");
+                say!("  seed {seed}, dt factor {f}, {code}: current result kept");
                 s
             }
             None => {
@@ -199,7 +200,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
                     *state = Some(compact(&case.setup(), &loose, case.compression_steps)?);
                 }
                 let state = state.as_ref().expect("compacted");
-                println!(
+                say!(
                     "  seed {seed}, dt factor {f} ({:e} s), {code}: {} steps",
                     cc.dt,
                     cc.total_steps()
@@ -331,12 +332,17 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             let finest = points.iter().rfind(|p| p.code == StudyCode::Native)?;
             Some(test(finest, im))
         });
-    println!(
+    say!(
         "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",
-        "code", "dt factor", "dt [s]", "steady mu (95 % CI)", "E_rot [J] (95 % CI)", "S max"
+        "code",
+        "dt factor",
+        "dt [s]",
+        "steady mu (95 % CI)",
+        "E_rot [J] (95 % CI)",
+        "S max"
     );
     for p in &points {
-        println!(
+        say!(
             "  {:<9} {:>9} {:>10.3e} {:>9.4} +- {:<6.4} {:>11.3e} +- {:<8.2e} {:>8.2}",
             p.code,
             p.dt_factor,
@@ -356,7 +362,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         )
     };
     for v in &per_code {
-        println!(
+        say!(
             "  {}: down to dt factor {}: its two smallest dt: {}{}",
             v.code,
             v.finest_factor,
@@ -371,9 +377,9 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         );
     }
     for (f, e) in &codes_agree {
-        println!("  dt factor {f}: native - LIGGGHTS: {}", says(e));
+        say!("  dt factor {f}: native - LIGGGHTS: {}", says(e));
     }
-    println!(
+    say!(
         "  verdict: {}; largest converged dt factor: {}",
         if converged {
             "converged (the two smallest dt are equivalent)"
@@ -387,7 +393,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             .unwrap_or_else(|| "none".into())
     );
     if let Some(e) = &implicit_matches_finest {
-        println!(
+        say!(
             "  epsd_implicit at dt factor {} - native epsd at dt factor {}: {}",
             factors[0],
             factors[factors.len() - 1],
@@ -417,6 +423,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
     super::note_summary(&out.join("summary.json"));
-    println!("  summary: {}", out.join("summary.json").display());
+    say!("  summary: {}", out.join("summary.json").display());
     Ok(summary)
 }

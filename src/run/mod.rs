@@ -20,6 +20,7 @@ pub mod replay;
 pub mod scaling;
 pub mod shear;
 pub mod sweep;
+pub mod tell;
 
 pub use limits::{check_memory, check_threads, max_threads};
 

@@ -16,6 +16,7 @@ use crate::compare::{within_cis, CONTACT_RTOL, MU_MARGIN, STRESS_RTOL};
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
+use crate::run::tell::say;
 use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::RollingModel;
 use serde::{Deserialize, Serialize};
@@ -143,7 +144,7 @@ pub fn run(a: &NightlyRequest, figures: &dyn Figures) -> Result<Night> {
     let commit = git_commit();
     let machine = Machine::detect();
     std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
-    println!(
+    say!(
         "verify nightly{}: output {}, history {}\n  {version}, commit {commit}, {}",
         if a.quick { " --quick" } else { "" },
         a.out.display(),
@@ -239,7 +240,7 @@ fn contact_night(a: &NightlyRequest) -> Result<Vec<ContactRow>> {
             }
             Err(e) => row.error = Some(e.to_string()),
         }
-        println!(
+        say!(
             "  contact {:<22} {:<6} max rel err {:>10.3e}  {}  ({:.1} s)",
             row.case,
             row.model,
@@ -329,7 +330,7 @@ fn shear_night(
         replay: None,
         dir,
     };
-    println!("\n== shear {} ==", row.name);
+    say!("\n== shear {} ==", row.name);
     match super::shear::run(&args, &|s| figures.seed(s)).and_then(|s| {
         figures.shear(&args.out, &s)?;
         fill_shear_row(&mut row, &s)
@@ -337,7 +338,7 @@ fn shear_night(
         Ok(()) => {}
         Err(e) => row.error = Some(e.to_string()),
     }
-    println!("\n== replay {} ==", row.name);
+    say!("\n== replay {} ==", row.name);
     match ShearCase::preset(preset, rolling, mu_r, eta_r, 1)
         .and_then(|case| replay_night(a, lig, case, &row.dir, figures))
     {
@@ -482,7 +483,7 @@ fn replay_night(
                 rtol: STEP1_RTOL,
                 out: out.clone(),
             };
-            (super::replay::run(&req, lig, |m| println!("  {m}"))?, true)
+            (super::replay::run(&req, lig, |m| say!("  {m}"))?, true)
         }
     };
     figures.replay(&out, &o, ran)?;

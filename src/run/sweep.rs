@@ -12,6 +12,7 @@ pub use super::Engine;
 use crate::compare::{steady, Steady};
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
+use crate::run::tell::say;
 use crate::series::Series;
 use crate::spec::shear::{CaseRequest, Overrides, Preset, Protocol, ShearCase};
 use crate::spec::stability_shear::stability;
@@ -299,10 +300,10 @@ pub fn run_one(
     match stored_result(sweep, r) {
         Ok(Some(res)) => return Ok((res, false)),
         Ok(None) => {}
-        Err(why) => eprintln!(
-            "warning: run {} ({}): the stored result.json is not reused: {why}; made again",
+        Err(why) => crate::run::tell::warning(&format!(
+            "run {} ({}): the stored result.json is not reused: {why}; made again",
             r.index, r.id
-        ),
+        )),
     }
     let dir = run_dir(sweep, r);
     let req = shear_request(&m.base, r, &dir, threads);
@@ -564,7 +565,7 @@ pub fn plan(p: &SweepRequest) -> Result<Manifest> {
             ));
         }
         if old.runs != m.runs {
-            println!(
+            say!(
                 "  the sweep grows from {} to {} runs (results of the common runs are kept)",
                 old.runs.len(),
                 m.runs.len()

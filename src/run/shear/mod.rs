@@ -12,12 +12,12 @@ use crate::fsutil::write_atomic;
 use crate::liggghts::Liggghts;
 use crate::packing::loose_packing;
 use crate::run::progress::Progress;
+use crate::run::tell;
 use crate::series::Series;
 use crate::shear::{run_liggghts, run_native, write_packing, Checkpointing, CHECKPOINT_EVERY};
 use crate::spec::shear::{CaseRequest, ShearCase};
 use crate::spec::windows::steady_window;
 use cache::{cached, store};
-use indicatif::MultiProgress;
 use lockstep::cached_lockstep;
 pub use lockstep::{lockstep_case, shear_lockstep, LOCKSTEP_CHANNELS, LOCKSTEP_SHEAR_STEPS};
 use outcome::slip_results;
@@ -229,7 +229,7 @@ fn announce(
     macro_rules! say {
         ($($t:tt)*) => {
             if !quiet {
-                println!($($t)*)
+                $crate::run::tell::say!($($t)*)
             }
         };
     }
@@ -270,7 +270,7 @@ fn announce(
         say!("    {d}");
     }
     for w in warnings.iter().filter(|_| !quiet) {
-        eprintln!("warning: {w}");
+        tell::warning(w);
     }
     let stab = crate::spec::stability_shear::stability(case0);
     say!("  stability (worst first; S = n (omega_r^2 dt^2 + 2 lambda dt), explicit dashpot unstable at S >= 4):");
@@ -291,7 +291,7 @@ fn announce(
             ));
         }
         if !quiet {
-            eprintln!("warning: {msg}");
+            tell::warning(&msg);
         }
     }
     Ok(Setting {
@@ -314,7 +314,7 @@ fn run_seed(
     macro_rules! say {
         ($($t:tt)*) => {
             if !quiet {
-                println!($($t)*)
+                $crate::run::tell::say!($($t)*)
             }
         };
     }
@@ -328,11 +328,10 @@ fn run_seed(
     )?;
     let packing = loose_packing(case);
     write_packing(&packing, &dir.join("initial_packing.csv"))?;
-    let multi = MultiProgress::new();
     let total = case.total_steps();
     // a bar (or decile lines off a terminal); quiet: lines under the caller's label, or none
     let progress = |code: &str| match (quiet, &a.progress_label) {
-        (false, _) => Progress::new(&multi, &format!("{code} s{}", case.seed), total, case.dt),
+        (false, _) => Progress::new(&format!("{code} s{}", case.seed), total, case.dt),
         (true, Some(l)) => Progress::lines(&format!("{l} {code}"), total, case.dt),
         (true, None) => Progress::hidden(),
     };

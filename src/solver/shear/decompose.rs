@@ -341,6 +341,27 @@ struct GhostRecord {
     mass: f64,
 }
 
+impl GhostRecord {
+    fn of(m: &Migrant) -> Self {
+        GhostRecord {
+            id: m.id,
+            x: m.x,
+            v: m.v,
+            omega: m.omega,
+            radius: m.radius,
+            mass: m.mass,
+        }
+    }
+}
+
+/// Where a particle of a brick comes from at a rebuild: its own particles after the
+/// migration (index in them), or the ghosts a rank sent (rank, index in its message).
+#[derive(Clone, Copy, Debug)]
+enum Held {
+    Own(u32),
+    Ghost(u32, u32),
+}
+
 /// An own particle as [`Brick::gather`] collects it.
 #[derive(Clone, serde::Serialize, serde::Deserialize)]
 struct Whole {
@@ -372,6 +393,11 @@ pub struct Brick {
     got: Vec<Vec<f64>>,
     /// Particles that arrived from other bricks at rebuilds (a statistic for tests).
     pub arrived: u64,
+    /// A rebuild's own particles and the order of all it holds: buffers kept from one
+    /// rebuild to the next (cleared, never freed), so that a rebuild does not fault in tens
+    /// of megabytes of fresh pages at 250,000 particles.
+    mine: Vec<Migrant>,
+    order: Vec<(u32, Held)>,
 }
 
 impl Brick {
@@ -471,6 +497,8 @@ impl Brick {
             out: Vec::new(),
             got: Vec::new(),
             arrived: 0,
+            mine: Vec::new(),
+            order: Vec::new(),
         };
         b.size_messages();
         b
@@ -573,9 +601,13 @@ impl Brick {
     fn rebuild(&mut self, t: &impl Transport) -> Result<()> {
         let team = self.sim.team();
         let checked = self.sim.check_diverged(&team);
-        let said: Vec<Option<String>> =
-            all_gather(t, checked.as_ref().err().map(|e| e.to_string()));
-        agree(checked, said, self.sim.step)?;
+        // one word summed over the bricks; the messages gathered only when one failed
+        let mut failed = [u64::from(checked.is_err())];
+        t.sum_u64(&mut failed);
+        if failed[0] != 0 {
+            let said = all_gather(t, checked.as_ref().err().map(|e| e.to_string()));
+            agree(checked, said, self.sim.step)?;
+        }
         self.sim.wrap();
         let over = Members {
             ids: &self.sim.ids,
@@ -598,13 +630,15 @@ impl Brick {
 
     /// Sends every own particle whose owner changed to its new brick with the histories of
     /// its pairs (LAMMPS `exchange`, fix contact/history's `pack_exchange`); returns this
-    /// brick's own particles after it, in increasing id, and the histories to carry into its
-    /// new list (its own and those that came with its new particles).
+    /// brick's own particles after it, in increasing id (in the buffer kept from the last
+    /// rebuild: no fresh pages at every rebuild), and the histories to carry into its new
+    /// list (its own and those that came with its new particles).
     fn migrate(&mut self, t: &impl Transport, mut carried: Carried) -> (Vec<Migrant>, Carried) {
         let s = &mut self.sim;
         let size = self.bricks.count();
         let mut leaving: Vec<Leaving> = vec![Default::default(); size];
-        let mut mine = Vec::new();
+        let mut mine = std::mem::take(&mut self.mine);
+        mine.clear();
         let mut gone = std::collections::HashMap::new();
         for q in 0..s.x.len() {
             if s.ghost[q] {
@@ -628,6 +662,7 @@ impl Brick {
             }
         }
         let got = t.exchange(leaving);
+        let staying = mine.len();
         for (from, (people, hist)) in got.into_iter().enumerate() {
             if from == self.me {
                 continue;
@@ -636,27 +671,23 @@ impl Brick {
             mine.extend(people);
             carried.merge(hist);
         }
-        mine.sort_by_key(|m| m.id);
+        // the staying ones are in increasing id already (local order is id order)
+        if mine.len() > staying {
+            mine.sort_by_key(|m| m.id);
+        }
         (mine, carried)
     }
 
     /// Sends each own particle to every other brick it is near as a ghost (LAMMPS
     /// `borders`), and makes this brick's particles its own `mine` and the ghosts it
     /// received, in increasing id, with the send and receive lists of `forward`.
-    fn border(&mut self, t: &impl Transport, mine: Vec<Migrant>) {
+    fn border(&mut self, t: &impl Transport, mut mine: Vec<Migrant>) {
         let size = self.bricks.count();
         let mut out: Vec<Vec<GhostRecord>> = vec![Vec::new(); size];
         for m in &mine {
             for (b, list) in out.iter_mut().enumerate() {
                 if b != self.me && self.bricks.holds(b, m.x, self.cut) {
-                    list.push(GhostRecord {
-                        id: m.id,
-                        x: m.x,
-                        v: m.v,
-                        omega: m.omega,
-                        radius: m.radius,
-                        mass: m.mass,
-                    });
+                    list.push(GhostRecord::of(m));
                 }
             }
         }
@@ -665,76 +696,63 @@ impl Brick {
             .map(|l| l.iter().map(|g| g.id).collect())
             .collect();
         let got = t.exchange(out);
-        // every particle once, in increasing id: (id, own record or (ghost, sender))
-        enum Held {
-            Own(Box<Migrant>),
-            Ghost(GhostRecord, usize),
+        // every particle once, in increasing id: where it comes from
+        let mut order = std::mem::take(&mut self.order);
+        order.clear();
+        order.extend((0..mine.len()).map(|k| (mine[k].id, Held::Own(k as u32))));
+        for (r, l) in got.iter().enumerate() {
+            order.extend((0..l.len()).map(|k| (l[k].id, Held::Ghost(r as u32, k as u32))));
         }
-        let mut all: Vec<(u32, Held)> = mine
-            .into_iter()
-            .map(|m| (m.id, Held::Own(Box::new(m))))
-            .chain(
-                got.into_iter()
-                    .enumerate()
-                    .flat_map(|(r, l)| l.into_iter().map(move |g| (g.id, Held::Ghost(g, r)))),
-            )
-            .collect();
-        all.sort_by_key(|e| e.0);
-        let n = all.len();
+        order.sort_by_key(|e| e.0);
+        self.recv = vec![Vec::new(); size];
         let s = &mut self.sim;
-        let nve = s.nve;
-        s.ids = all.iter().map(|e| e.0).collect();
-        s.ghost = all.iter().map(|e| matches!(e.1, Held::Ghost(..))).collect();
-        s.x.clear();
-        s.v.clear();
-        s.omega.clear();
-        s.f.clear();
-        s.torque.clear();
+        s.ids.clear();
+        s.ids.extend(order.iter().map(|e| e.0));
+        s.ghost.clear();
+        s.ghost
+            .extend(order.iter().map(|e| matches!(e.1, Held::Ghost(..))));
+        for v in [&mut s.x, &mut s.v, &mut s.omega, &mut s.f, &mut s.torque] {
+            v.clear();
+        }
         s.rotation.clear();
         s.radius.clear();
         s.mass.clear();
         s.wall.clear();
-        self.recv = vec![Vec::new(); size];
-        for (l, (_, h)) in all.into_iter().enumerate() {
-            let (x, v, w, f, tq, rot, r, m, wall) = match h {
-                Held::Own(m) => {
-                    let m = *m;
-                    (
-                        m.x, m.v, m.omega, m.f, m.torque, m.rotation, m.radius, m.mass, m.wall,
-                    )
+        for (l, &(_, h)) in order.iter().enumerate() {
+            match h {
+                Held::Own(k) => {
+                    let m = &mut mine[k as usize];
+                    s.x.push(m.x);
+                    s.v.push(m.v);
+                    s.omega.push(m.omega);
+                    s.f.push(m.f);
+                    s.torque.push(m.torque);
+                    s.rotation.push(m.rotation);
+                    s.radius.push(m.radius);
+                    s.mass.push(m.mass);
+                    s.wall.push(std::mem::take(&mut m.wall));
                 }
-                Held::Ghost(g, from) => {
-                    self.recv[from].push(l as u32);
+                Held::Ghost(from, k) => {
+                    self.recv[from as usize].push(l as u32);
+                    let g = &got[from as usize][k as usize];
                     let z = [0.0; 3];
-                    (
-                        g.x,
-                        g.v,
-                        g.omega,
-                        z,
-                        z,
-                        z,
-                        g.radius,
-                        g.mass,
-                        WallSlots::default(),
-                    )
+                    s.x.push(g.x);
+                    s.v.push(g.v);
+                    s.omega.push(g.omega);
+                    s.f.push(z);
+                    s.torque.push(z);
+                    s.rotation.push(z);
+                    s.radius.push(g.radius);
+                    s.mass.push(g.mass);
+                    s.wall.push(WallSlots::default());
                 }
-            };
-            s.x.push(x);
-            s.v.push(v);
-            s.omega.push(w);
-            s.f.push(f);
-            s.torque.push(tq);
-            s.rotation.push(rot);
-            s.radius.push(r);
-            s.mass.push(m);
-            s.wall.push(wall);
+            }
         }
-        s.kick = s
-            .radius
-            .iter()
-            .zip(&s.mass)
-            .map(|(r, m)| nve.kick(*r, *m))
-            .collect();
+        let n = order.len();
+        let nve = s.nve;
+        s.kick.clear();
+        s.kick
+            .extend(s.radius.iter().zip(&s.mass).map(|(r, m)| nve.kick(*r, *m)));
         s.size_particle_buffers(n);
         let ids = &s.ids;
         self.send = sent
@@ -745,6 +763,9 @@ impl Brick {
                     .collect()
             })
             .collect();
+        mine.clear();
+        self.mine = mine;
+        self.order = order;
     }
 
     /// The whole state, on rank 0 (None on the others: no rank but the writing one holds
@@ -1062,10 +1083,16 @@ impl ShearSim {
     /// Sizes the per-particle scratch of `n` particles: the pair sums (zero), the plate
     /// forces, epsd_implicit's dashpot sums; the SIMD records are made anew by the next pass.
     fn size_particle_buffers(&mut self, n: usize) {
-        self.acc = vec![ForceData::default(); n];
-        self.wall_force = vec![([0.0; 3], [0.0; 3]); n];
+        // cleared and refilled in the capacity they have (a rebuild's brick holds about
+        // as many as the last: no fresh pages to fault in at every rebuild)
+        fn fill<T: Clone>(v: &mut Vec<T>, n: usize, x: T) {
+            v.clear();
+            v.resize(n, x);
+        }
+        fill(&mut self.acc, n, ForceData::default());
+        fill(&mut self.wall_force, n, ([0.0; 3], [0.0; 3]));
         if self.implicit {
-            self.imp = vec![([0.0; 6], [0.0; 3]); n];
+            fill(&mut self.imp, n, ([0.0; 6], [0.0; 3]));
         }
         self.packed = Vec::new();
         self.packed_current = false;
@@ -1123,6 +1150,53 @@ mod tests {
         assert!(ends[1..].iter().all(|(w, _)| w.is_none()));
         let (one, moved) = ends.into_iter().next().unwrap();
         (one.expect("rank 0 gathers"), moved)
+    }
+
+    /// A particle blown up in one brick (held by no other) stops every brick at the same
+    /// rebuild: the one that holds it with the particle's message, the other saying another
+    /// brick stopped, with that message (the failure flag summed over the bricks, the
+    /// messages gathered).
+    #[test]
+    fn a_blown_up_particle_stops_every_brick_at_the_same_step() {
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 3).unwrap();
+        c.particles = 120;
+        let mut global = ShearSim::new(&c.setup(), &loose_packing(&c));
+        global.setup(0.0).unwrap();
+        let bricks = split_for(2, global.box_.lx, global.box_.lz);
+        let mut b = [0, 1].map(|r| Brick::of(&global, bricks, r));
+        // a particle of brick 0 that brick 1 does not hold as a ghost
+        let l = (0..b[0].sim.ids.len())
+            .find(|&l| !b[0].sim.ghost[l] && !b[1].sim.ids.contains(&b[0].sim.ids[l]))
+            .expect("a particle far from the other brick");
+        let id = b[0].sim.ids[l];
+        b[0].sim.v[l] = [0.0, 1e12, 0.0];
+        let ends: Vec<(u64, String)> = std::thread::scope(|scope| {
+            let runs: Vec<_> = InProcess::group(2)
+                .into_iter()
+                .zip(b.iter_mut())
+                .map(|(t, b)| {
+                    scope.spawn(move || {
+                        for _ in 0..200 {
+                            if let Err(e) = b.step(&t) {
+                                return (b.sim.step, e.to_string());
+                            }
+                        }
+                        (b.sim.step, String::new())
+                    })
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        });
+        let said = format!("diverged: particle {}", id + 1);
+        assert_eq!(ends[0].0, ends[1].0, "{ends:?}");
+        assert!(
+            ends[0].1.contains(&said) && !ends[0].1.contains("another brick"),
+            "{ends:?}"
+        );
+        assert!(
+            ends[1].1.contains("another brick stopped") && ends[1].1.contains(&said),
+            "{ends:?}"
+        );
     }
 
     /// Bricks split the longer side first: the least boundary between them.

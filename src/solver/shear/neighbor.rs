@@ -111,15 +111,43 @@ impl Carried {
     /// Merges histories carried from elsewhere (a brick's immigrants, `ij` global) into
     /// these: sorted by key, one entry per pair (two copies of a pair's history, one per
     /// owner of its members, are equal bit for bit: the first is kept).
+    /// Done in place (the incoming few sorted, then the two sorted runs merged from the
+    /// back into the grown arrays, then each key's first entry kept), without a copy of the
+    /// whole list: as the stable sort of these followed by the incoming would order them.
     pub fn merge(&mut self, more: impl IntoIterator<Item = ((u32, u32), ContactHistory)>) {
-        let mut all: Vec<((u32, u32), ContactHistory)> = std::mem::take(&mut self.ij)
-            .into_iter()
-            .zip(std::mem::take(&mut self.hist))
-            .chain(more)
-            .collect();
-        all.sort_by_key(|e| Carried::key(e.0));
-        all.dedup_by_key(|e| Carried::key(e.0));
-        (self.ij, self.hist) = all.into_iter().unzip();
+        let mut more: Vec<((u32, u32), ContactHistory)> = more.into_iter().collect();
+        if more.is_empty() {
+            return;
+        }
+        more.sort_by_key(|e| Carried::key(e.0));
+        let (n, m) = (self.ij.len(), more.len());
+        self.ij.resize(n + m, (0, 0));
+        self.hist.resize(n + m, ContactHistory::default());
+        let (mut i, mut w) = (n, n + m);
+        while let Some(&(ij, h)) = more.last() {
+            w -= 1;
+            // equal keys: these before the incoming (from the back, the incoming first)
+            if i > 0 && Carried::key(self.ij[i - 1]) > Carried::key(ij) {
+                i -= 1;
+                self.ij[w] = self.ij[i];
+                self.hist[w] = self.hist[i];
+            } else {
+                self.ij[w] = ij;
+                self.hist[w] = h;
+                more.pop();
+            }
+        }
+        // one entry per key, its first
+        let mut kept = 0;
+        for k in 0..self.ij.len() {
+            if kept == 0 || Carried::key(self.ij[k]) != Carried::key(self.ij[kept - 1]) {
+                self.ij[kept] = self.ij[k];
+                self.hist[kept] = self.hist[k];
+                kept += 1;
+            }
+        }
+        self.ij.truncate(kept);
+        self.hist.truncate(kept);
     }
 }
 
@@ -406,6 +434,44 @@ mod tests {
     use super::*;
 
     use proptest::prelude::*;
+
+    proptest! {
+        /// The in-place merge gives what the stable sort of the carried histories followed
+        /// by the incoming ones, then each key's first entry, gives: the order, the kept
+        /// copy of a pair carried twice, and every bit of the histories.
+        #[test]
+        fn merge_in_place_is_sort_then_first_of_each_key(
+            mine in proptest::collection::btree_set((0u32..60, 0u32..60), 0..80),
+            more in proptest::collection::vec(((0u32..60, 0u32..60), -5.0f64..5.0), 0..30),
+        ) {
+            let hist = |v: f64| {
+                let mut h = ContactHistory::default();
+                h.shear[0] = v;
+                h
+            };
+            // carried: one entry per key, in key order, as take_carried leaves them
+            let mut keys: Vec<(u32, u32)> = mine.iter().map(|&p| Carried::key(p)).collect();
+            keys.sort();
+            keys.dedup();
+            let mut c = Carried {
+                ij: keys.iter().map(|&(a, b)| (b, a)).collect(),
+                hist: (0..keys.len()).map(|k| hist(k as f64)).collect(),
+                listed: 0,
+            };
+            let more: Vec<((u32, u32), ContactHistory)> =
+                more.iter().map(|&(ij, v)| (ij, hist(v))).collect();
+            let mut want: Vec<((u32, u32), ContactHistory)> =
+                c.ij.iter().copied().zip(c.hist.iter().copied()).chain(more.clone()).collect();
+            want.sort_by_key(|e| Carried::key(e.0));
+            want.dedup_by_key(|e| Carried::key(e.0));
+            c.merge(more);
+            let got: Vec<((u32, u32), u64)> =
+                c.ij.iter().zip(&c.hist).map(|(&ij, h)| (ij, h.shear[0].to_bits())).collect();
+            let want: Vec<((u32, u32), u64)> =
+                want.iter().map(|(ij, h)| (*ij, h.shear[0].to_bits())).collect();
+            prop_assert_eq!(got, want);
+        }
+    }
 
     /// `resize_snug` keeps the values, the length asked for, and at most about 1/8 spare,
     /// growing or shrinking.

@@ -163,7 +163,7 @@ impl WallContext<'_> {
                 let mut cd =
                     ContactData::wall(radius[q], mass[q], hit.delta, deltan, v[q], vw, omega[q]);
                 if trace {
-                    eprintln!(
+                    log::trace!(
                         "wall p {} mesh {m} tri {tri} img {img} face {} d {:e} cp {:e} {:e} {:e}",
                         q + 1,
                         hit.face,
