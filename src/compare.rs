@@ -592,6 +592,30 @@ mod shear_tests {
         assert_eq!(h.first_diverge_channel.as_deref(), Some("missing rows"));
     }
 
+    /// The tolerance is rtol times the channel's peak (not rtol over it), and a channel both
+    /// codes hold at exactly zero agrees (a zero difference is not beyond a zero peak).
+    #[test]
+    fn the_tolerance_scales_with_the_peak_and_a_zero_channel_agrees() {
+        // top_f about 1000 N: 0.5 N apart is within 1e-3 of it, 2 N is not
+        let a = s(&[1000.0, 1000.0, 1000.0]);
+        let mut b = a.clone();
+        b.rows[1][0] = 1000.5;
+        assert_eq!(lockstep(&a, &b, &["top_f"], 1e-3).first_diverge_step, None);
+        b.rows[2][0] = 1002.0;
+        let h = lockstep(&a, &b, &["top_f"], 1e-3);
+        assert_eq!((h.last_agree_step, h.first_diverge_step), (10, Some(20)));
+        // mu = 0 at every step in both
+        let z = s(&[0.0, 0.0, 0.0]);
+        assert_eq!(lockstep(&z, &z, &["mu"], 1e-6).first_diverge_step, None);
+    }
+
+    /// `b_higher` counts the seeds where b is strictly higher: a tie is not one.
+    #[test]
+    fn a_tied_seed_is_not_counted_higher() {
+        let p = paired(&[0.5, 0.6, 0.4], &[0.5, 0.7, 0.3]).unwrap();
+        assert_eq!(p.b_higher, 1);
+    }
+
     #[test]
     #[should_panic(expected = "lockstep channel `top_g` is not in the series")]
     fn misspelt_lockstep_channel_is_a_bug() {

@@ -66,32 +66,31 @@ pub fn install(sink: Box<dyn Sink>) -> bool {
     SINK.set(sink).is_ok()
 }
 
+/// `f` on the installed sink, if any.
+fn to_sink(f: impl FnOnce(&dyn Sink)) {
+    if let Some(s) = SINK.get() {
+        f(s.as_ref());
+    }
+}
+
 /// Says a line of the command's account.
 pub fn line(text: &str) {
-    if let Some(s) = SINK.get() {
-        s.line(text);
-    }
+    to_sink(|s| s.line(text));
 }
 
 /// Says a warning.
 pub fn warning(text: &str) {
-    if let Some(s) = SINK.get() {
-        s.warning(text);
-    }
+    to_sink(|s| s.warning(text));
 }
 
 /// Says a note.
 pub fn note(text: &str) {
-    if let Some(s) = SINK.get() {
-        s.note(text);
-    }
+    to_sink(|s| s.note(text));
 }
 
 /// Reports progress.
 pub fn progress(tick: &Tick) {
-    if let Some(s) = SINK.get() {
-        s.progress(tick);
-    }
+    to_sink(|s| s.progress(tick));
 }
 
 /// True when the installed sink shows progress live.
