@@ -408,37 +408,9 @@ impl Brick {
         let held = global.xhold.clone();
         let (ids, own) = bricks.members(me, &held, cut);
         let ghost: Vec<bool> = own.iter().map(|o| !o).collect();
-        let local_of = |g: usize| ids.binary_search(&g).ok();
         let pick = |v: &[V3]| ids.iter().map(|&q| v[q]).collect::<Vec<V3>>();
-        // the pairs with an own member, in list order (increasing key: local order is id
-        // order), their histories with them
-        let mut nl = NeighborList {
-            builds: global.nl.builds,
-            ..Default::default()
-        };
-        for (p, h) in global.nl.pairs.iter().zip(&global.nl.hist) {
-            let (i, j) = (local_of(p.i as usize), local_of(p.j as usize));
-            if let (Some(i), Some(j)) = (i, j) {
-                if own[i] || own[j] {
-                    nl.pairs.push(Pair {
-                        i: i as u32,
-                        j: j as u32,
-                        shift: p.shift,
-                    });
-                    nl.hist.push(*h);
-                }
-            }
-        }
-        nl.index(ids.len());
-        let mut wall_start = vec![0u32];
-        let mut wall_cand = Vec::new();
-        for (&q, &o) in ids.iter().zip(&own) {
-            if o {
-                let s = &global.wall_start;
-                wall_cand.extend_from_slice(&global.wall_cand[s[q] as usize..s[q + 1] as usize]);
-            }
-            wall_start.push(wall_cand.len() as u32);
-        }
+        let nl = local_pairs(global, &ids, &own);
+        let (wall_start, wall_cand) = local_plate_candidates(global, &ids, &own);
         let n = ids.len();
         let mut sim = ShearSim {
             x: pick(&global.x),
@@ -471,20 +443,7 @@ impl Brick {
         };
         sim.size_particle_buffers(n);
         sim.size_pair_buffers();
-        // who sends whom which ghosts: the same rule on every brick
-        let mut send = vec![Vec::new(); bricks.count()];
-        let mut recv = vec![Vec::new(); bricks.count()];
-        for (l, &q) in ids.iter().enumerate() {
-            if own[l] {
-                for (s, list) in send.iter_mut().enumerate() {
-                    if s != me && bricks.holds(s, held[q], cut) {
-                        list.push(l as u32);
-                    }
-                }
-            } else {
-                recv[bricks.owner(held[q])].push(l as u32);
-            }
-        }
+        let (send, recv) = ghost_lists(bricks, me, &ids, &own, &held, cut);
         let plates = own_with_candidates(&sim);
         let mut b = Brick {
             sim,
@@ -978,6 +937,77 @@ pub fn split_for(ranks: usize, lx: f64, lz: f64) -> Bricks {
         })
         .unwrap_or((1, 1));
     Bricks { nx, nz, lx, lz }
+}
+/// Brick [`Brick::of`]'s pairs: those of `global`'s list with an own member, in list order
+/// (increasing key: local order is id order), their histories with them; `ids` the brick's
+/// particles (global indices, increasing), `own` which of them it owns.
+fn local_pairs(global: &ShearSim, ids: &[usize], own: &[bool]) -> NeighborList {
+    let local_of = |g: usize| ids.binary_search(&g).ok();
+    let mut nl = NeighborList {
+        builds: global.nl.builds,
+        ..Default::default()
+    };
+    for (p, h) in global.nl.pairs.iter().zip(&global.nl.hist) {
+        let (i, j) = (local_of(p.i as usize), local_of(p.j as usize));
+        if let (Some(i), Some(j)) = (i, j) {
+            if own[i] || own[j] {
+                nl.pairs.push(Pair {
+                    i: i as u32,
+                    j: j as u32,
+                    shift: p.shift,
+                });
+                nl.hist.push(*h);
+            }
+        }
+    }
+    nl.index(ids.len());
+    nl
+}
+
+/// Brick [`Brick::of`]'s plate candidates (start offsets and records): an own particle's
+/// from `global`, none for a ghost.
+fn local_plate_candidates(
+    global: &ShearSim,
+    ids: &[usize],
+    own: &[bool],
+) -> (Vec<u32>, Vec<(u8, u32, u8)>) {
+    let mut wall_start = vec![0u32];
+    let mut wall_cand = Vec::new();
+    for (&q, &o) in ids.iter().zip(own) {
+        if o {
+            let s = &global.wall_start;
+            wall_cand.extend_from_slice(&global.wall_cand[s[q] as usize..s[q + 1] as usize]);
+        }
+        wall_start.push(wall_cand.len() as u32);
+    }
+    (wall_start, wall_cand)
+}
+
+/// Who sends brick `me` which ghosts and whom it sends its own, by the positions of the
+/// last rebuild `held` (the same rule on every brick): per rank, the local indices of own
+/// particles it holds as ghosts, and of the ghosts it owns.
+fn ghost_lists(
+    bricks: Bricks,
+    me: usize,
+    ids: &[usize],
+    own: &[bool],
+    held: &[V3],
+    cut: f64,
+) -> (Vec<Vec<u32>>, Vec<Vec<u32>>) {
+    let mut send = vec![Vec::new(); bricks.count()];
+    let mut recv = vec![Vec::new(); bricks.count()];
+    for (l, &q) in ids.iter().enumerate() {
+        if own[l] {
+            for (s, list) in send.iter_mut().enumerate() {
+                if s != me && bricks.holds(s, held[q], cut) {
+                    list.push(l as u32);
+                }
+            }
+        } else {
+            recv[bricks.owner(held[q])].push(l as u32);
+        }
+    }
+    (send, recv)
 }
 
 /// A brick's own particles with plate candidates (local indices, increasing id): its share
