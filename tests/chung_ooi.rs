@@ -257,3 +257,49 @@ fn the_wall_cases_are_judged_the_same_wherever_the_wall_is() {
         assert!(overlap.pass, "{name}: {overlap:?}");
     }
 }
+
+/// The judge reads the contact duration at any output stride and start: the Hertz cases'
+/// series thinned to every 2nd step from step 1 (stride 2, first step 1) give the duration of
+/// the series written every step to within two strides. (cargo-mutants survivors: with every
+/// series written every step from step 0, `touching * stride` and `touching / stride`, and
+/// `steps[1] - steps[0]` and `steps[1] + steps[0]`, gave the same numbers.)
+#[test]
+fn the_duration_is_read_at_any_output_stride() {
+    use dem_verify::chung_ooi::{judge, Expect};
+    use dem_verify::series::contact_series;
+    use dem_verify::solver::two_body;
+    let hertz: Vec<_> = cases()
+        .into_iter()
+        .filter(|b| matches!(b.expect, Expect::Hertz))
+        .collect();
+    assert!(!hertz.is_empty(), "no Hertz case");
+    for b in &hertz {
+        let name = &b.case.name;
+        let case = b.case.clone().validate().unwrap();
+        let full = contact_series(&case, &two_body::run(&case.two_body()).unwrap()).unwrap();
+        let mut thin = full.clone();
+        let keep: Vec<usize> = (0..full.steps.len())
+            .filter(|&k| full.steps[k] % 2 == 1)
+            .collect();
+        thin.steps = keep.iter().map(|&k| full.steps[k]).collect();
+        thin.rows = keep.iter().map(|&k| full.rows[k].clone()).collect();
+        assert_eq!(
+            (full.steps[1] - full.steps[0], thin.steps[0], thin.steps[1] - thin.steps[0]),
+            (1, 1, 2),
+            "{name}: the series must be written every step from step 0"
+        );
+        let duration = |s: &dem_verify::series::Series| {
+            judge(b, s)
+                .unwrap()
+                .into_iter()
+                .find(|c| c.figure == "contact duration [s]")
+                .unwrap_or_else(|| panic!("{name}: no duration judged"))
+                .measured
+        };
+        let (d_full, d_thin) = (duration(&full), duration(&thin));
+        assert!(
+            (d_thin - d_full).abs() <= 2.0 * 2.0 * b.case.dt,
+            "{name}: duration {d_full:e} s every step, {d_thin:e} s every 2nd"
+        );
+    }
+}
