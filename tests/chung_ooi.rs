@@ -284,7 +284,11 @@ fn the_duration_is_read_at_any_output_stride() {
         thin.steps = keep.iter().map(|&k| full.steps[k]).collect();
         thin.rows = keep.iter().map(|&k| full.rows[k].clone()).collect();
         assert_eq!(
-            (full.steps[1] - full.steps[0], thin.steps[0], thin.steps[1] - thin.steps[0]),
+            (
+                full.steps[1] - full.steps[0],
+                thin.steps[0],
+                thin.steps[1] - thin.steps[0]
+            ),
             (1, 1, 2),
             "{name}: the series must be written every step from step 0"
         );
