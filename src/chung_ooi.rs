@@ -616,6 +616,23 @@ mod tests {
         }
     }
 
+    /// The wall cases' plane is the benchmark's rigid wall: 1000 times the sphere's modulus,
+    /// so that the pair's effective modulus is the sphere's own E / (1 - nu^2) to 0.1 % (a
+    /// cargo-mutants survivor, run 8: a wall of modulus `1000 + E`, as soft as the sphere, was
+    /// judged against a theory made with the same wall).
+    #[test]
+    fn the_wall_is_rigid() {
+        let walls: Vec<_> = cases().into_iter().filter(|b| b.case.wall.is_some()).collect();
+        assert!(!walls.is_empty(), "no wall case");
+        for b in walls {
+            let c = &b.case;
+            let w = c.wall.as_ref().and_then(|w| w.material).expect("the wall's own material");
+            let own = c.material.youngs_modulus / (1.0 - c.material.poisson_ratio.powi(2));
+            let y = y_eff(&c.material, Some(&w));
+            assert!((y / own - 1.0).abs() < 1.1e-3, "{}: {y} against {own}", c.name);
+        }
+    }
+
     /// A series of one row is refused as nothing to judge; two rows are judged (here refused
     /// for another reason: no contact in them). A cargo-mutants survivor moved the bound.
     #[test]

@@ -150,6 +150,10 @@ mod tests {
         let r = compare("c", "m", &a, &b, 1e-9).unwrap();
         assert_eq!(r[1].peak, 5.0);
         assert_eq!(r[1].max_rel_err, 4.0 / 5.0);
+        // and the second's, the other way round (run 8's survivor: `rb * rb` to `rb / rb`)
+        let r = compare("c", "m", &b, &a, 1e-9).unwrap();
+        assert_eq!(r[1].peak, 5.0);
+        assert_eq!(r[1].max_rel_err, 4.0 / 5.0);
     }
 
     #[test]

@@ -75,15 +75,21 @@ mod tests {
         assert_eq!(cd.vtr[2], 0.0);
     }
 
+    /// The wall's lever `cr = radi - overlap / 2` and `wr = cr omega / r`, on every axis (a
+    /// cargo-mutants survivor, run 8: `cr omega_z / rinv` went unseen while only omega_y
+    /// was tested).
     #[test]
     fn wall_uses_the_overlap_stored_by_the_mesh_code() {
-        let mut cd = wall([0.0, 50.0, 0.0], 2e-6);
+        let omega = [30.0, 50.0, 70.0];
+        let mut cd = wall(omega, 2e-6);
         surface(&mut cd);
         assert_eq!(cd.cri, 1e-3 - 1e-6);
-        assert_relative_eq!(
-            cd.wr[1],
-            (1e-3 - 1e-6) * 50.0 / (1e-3 - 2e-6),
-            max_relative = 1e-14
-        );
+        for k in 0..3 {
+            assert_relative_eq!(
+                cd.wr[k],
+                (1e-3 - 1e-6) * omega[k] / (1e-3 - 2e-6),
+                max_relative = 1e-14
+            );
+        }
     }
 }

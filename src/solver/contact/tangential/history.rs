@@ -136,11 +136,13 @@ mod tests {
     }
 
     /// The sliding label: at the Coulomb limit to round-off, not below it (a cargo-mutants
-    /// survivor: the label's tolerance `1 - 1e-9` could become `1 / 1e-9` unseen).
+    /// survivor: the label's tolerance `1 - 1e-9` could become `1 / 1e-9` unseen). The cap
+    /// is not 1 N, so that `cap / cap` for `cap * cap` (run 8's survivor, when mu_p Fn was
+    /// exactly 1) is seen too.
     #[test]
     fn sliding_is_the_coulomb_limit_to_round_off() {
         let p = params(RollingModel::Off);
-        let fn_ = 2.0;
+        let fn_ = 3.0;
         let cap = p.coeff_frict * fn_;
         assert!(sliding::<f64>([cap, 0.0, 0.0], fn_, &p));
         assert!(sliding::<f64>([0.0, 0.0, -cap * (1.0 - 1e-12)], -fn_, &p));
