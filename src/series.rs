@@ -342,7 +342,7 @@ mod tests {
 
     #[test]
     fn lost_atom_or_empty_dump_is_an_error_naming_the_step() {
-        let case = crate::spec::builtin_case("rolling_plastic")
+        let case = crate::spec::builtin::builtin_case("rolling_plastic")
             .unwrap()
             .with_rolling(crate::spec::RollingModel::Epsd)
             .validate()

@@ -482,7 +482,7 @@ fn list_names_every_case() {
     let o = verify(&["contact", "--list"]);
     assert_eq!(o.status.code(), Some(0));
     let s = String::from_utf8_lossy(&o.stdout);
-    for c in dem_verify::spec::builtin_names() {
+    for c in dem_verify::spec::builtin::builtin_names() {
         assert!(s.contains(c), "--list lacks {c}");
     }
 }

@@ -6,7 +6,8 @@ use dem_verify::deck::run_name;
 use dem_verify::run::contact::{contact_runs, write_decks, RollingChoice};
 use dem_verify::series::{contact_series, Series};
 use dem_verify::solver::two_body;
-use dem_verify::spec::{builtin_case, CaseFile, RollingModel};
+use dem_verify::spec::builtin::builtin_case;
+use dem_verify::spec::{CaseFile, RollingModel};
 use std::path::Path;
 
 fn root() -> &'static Path {

@@ -14,7 +14,8 @@ use crate::run::contact::{
     RollingChoice,
 };
 use crate::run::{out_or_default, Verdict, CONTACT_TIMEOUT_S};
-use crate::spec::{builtin_case, RollingModel, BUILTIN_CASES};
+use crate::spec::builtin::{builtin_case, BUILTIN_CASES};
+use crate::spec::RollingModel;
 use clap::Args;
 use std::path::PathBuf;
 

@@ -344,7 +344,7 @@ fn stl(z: f64, h: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::builtin_case;
+    use crate::spec::builtin::builtin_case;
 
     #[test]
     fn numbers_round_trip() {

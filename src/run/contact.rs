@@ -9,7 +9,8 @@ use crate::fsutil::{sha256_hex, write_atomic};
 use crate::liggghts::{read_contact_frames, Liggghts};
 use crate::series::{contact_series, Series};
 use crate::solver::two_body;
-use crate::spec::{builtin_case, builtin_names, Case, CaseFile, RollingModel};
+use crate::spec::builtin::{builtin_case, builtin_names};
+use crate::spec::{Case, CaseFile, RollingModel};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

@@ -8,6 +8,7 @@ pub mod kinematics;
 pub mod material;
 pub mod mesh;
 pub mod shear;
+pub mod stability;
 pub mod team;
 pub mod trimesh;
 pub mod two_body;

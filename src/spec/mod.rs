@@ -6,15 +6,13 @@
 //! deck could not represent faithfully or that would let a case file inject deck commands:
 //! names are identifiers, every number is finite and in range.
 
-mod builtin;
+pub mod builtin;
 pub mod paper_table;
 pub mod shear;
-mod stability;
 pub mod stability_shear;
 pub mod windows;
 
-pub use builtin::{builtin_case, builtin_names, BUILTIN_CASES};
-pub use stability::{hertz_collision, rayleigh_time, HertzCollision};
+pub use crate::solver::stability::{hertz_collision, HertzCollision};
 // the contact models a case names are the solver's (one per LIGGGHTS keyword)
 pub use crate::solver::contact::models::{NormalModel, RollingModel, TangentialModel};
 
@@ -51,6 +49,12 @@ pub struct Material {
     /// name global_properties.cpp registers), >= 1 in SI.
     #[serde(default = "default_rolling_stiffness")]
     pub rolling_stiffness: f64,
+}
+
+/// Rayleigh time of a sphere of radius `r` of material `m` [s]
+/// ([`crate::solver::stability::rayleigh_time`]).
+pub fn rayleigh_time(m: &Material, r: f64) -> f64 {
+    crate::solver::stability::rayleigh_time(m.elastic(), m.density, r)
 }
 
 fn default_rolling_stiffness() -> f64 {
@@ -769,6 +773,7 @@ fn range_ge(field: &str, v: f64, min: f64, why: &str) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
+    use super::builtin::{builtin_case, builtin_names};
     use super::*;
 
     fn base() -> CaseFile {

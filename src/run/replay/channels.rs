@@ -3,7 +3,7 @@
 //! channels are judged ([`JUDGED`]) and which check the kernel alone.
 
 use super::dumps::{v3, Dumped};
-use super::ChannelError;
+use super::outcome::ChannelError;
 use crate::error::Result;
 use crate::solver::contact::ContactHistory;
 use crate::solver::shear::replay::{PairObservation, WallObservation};

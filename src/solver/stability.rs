@@ -1,12 +1,13 @@
-//! Time-step limits from a case's materials and radii.
+//! Time-step limits and the closed-form Hertz collision, from elastic constants and radii
+//! (the physics they estimate; a case applies them to its material: `spec::rayleigh_time`).
 
-use super::Material;
+use super::material::Elastic;
 
-/// Rayleigh time of a sphere of radius `r` [s]:
-/// `T_R = pi r sqrt(rho / G) / (0.1631 nu + 0.8766)`, `G = E / (2 (1 + nu))`.
-pub fn rayleigh_time(m: &Material, r: f64) -> f64 {
-    let g = m.youngs_modulus / (2.0 * (1.0 + m.poisson_ratio));
-    std::f64::consts::PI * r * (m.density / g).sqrt() / (0.1631 * m.poisson_ratio + 0.8766)
+/// Rayleigh time of a sphere of radius `r` [s] of elastic constants `e` and density
+/// `density`: `T_R = pi r sqrt(rho / G) / (0.1631 nu + 0.8766)`, `G = E / (2 (1 + nu))`.
+pub fn rayleigh_time(e: Elastic, density: f64, r: f64) -> f64 {
+    let g = e.youngs_modulus / (2.0 * (1.0 + e.poisson_ratio));
+    std::f64::consts::PI * r * (density / g).sqrt() / (0.1631 * e.poisson_ratio + 0.8766)
 }
 
 /// Hertz theory of an elastic head-on collision (no damping, no friction).
