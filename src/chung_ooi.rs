@@ -622,14 +622,25 @@ mod tests {
     /// judged against a theory made with the same wall).
     #[test]
     fn the_wall_is_rigid() {
-        let walls: Vec<_> = cases().into_iter().filter(|b| b.case.wall.is_some()).collect();
+        let walls: Vec<_> = cases()
+            .into_iter()
+            .filter(|b| b.case.wall.is_some())
+            .collect();
         assert!(!walls.is_empty(), "no wall case");
         for b in walls {
             let c = &b.case;
-            let w = c.wall.as_ref().and_then(|w| w.material).expect("the wall's own material");
+            let w = c
+                .wall
+                .as_ref()
+                .and_then(|w| w.material)
+                .expect("the wall's own material");
             let own = c.material.youngs_modulus / (1.0 - c.material.poisson_ratio.powi(2));
             let y = y_eff(&c.material, Some(&w));
-            assert!((y / own - 1.0).abs() < 1.1e-3, "{}: {y} against {own}", c.name);
+            assert!(
+                (y / own - 1.0).abs() < 1.1e-3,
+                "{}: {y} against {own}",
+                c.name
+            );
         }
     }
 

@@ -427,6 +427,8 @@ pub struct Timed {
     pub seconds: f64,
     pub cpu_seconds: Option<f64>,
     pub phases: Option<PhaseTimes>,
+    /// Every rank's phases (decomposed; one process: its own).
+    pub rank_phases: Vec<Option<PhaseTimes>>,
     pub rebuilds: u64,
     pub traffic: Option<Traffic>,
 }
@@ -462,11 +464,13 @@ pub fn timed_steps(s: &mut dyn Stepper, t: crate::ranks::Timing) -> Result<Timed
     }
     let seconds = t0.elapsed().as_secs_f64();
     let cpu_seconds = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
+    let rank_phases = s.phases_by_rank();
     let local = s.local();
     local.check_finite()?;
     Ok(Timed {
         seconds,
         cpu_seconds,
+        rank_phases,
         phases: local.phase_times(),
         rebuilds: local.neighbor_builds() - builds0,
         traffic: s.traffic().zip(traffic0).map(|(b, a)| b.since(&a)),

@@ -105,6 +105,10 @@ pub struct BenchRow {
     /// Native over ranks: what rank 0's exchanges carried during the timed steps.
     #[serde(default)]
     pub traffic: Option<Traffic>,
+    /// Native over ranks: every rank's phases, by rank (rank 0's are `phases`): a rank
+    /// busier than the others makes them wait in `comm`.
+    #[serde(default)]
+    pub rank_phases: Vec<PhaseTimes>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -313,6 +317,27 @@ fn print_row(r: &BenchRow) {
                     "           ns per particle-step{}: {}",
                     if r.ranks > 1 { " (rank 0)" } else { "" },
                     parts.join(", ")
+                );
+            }
+            if r.rank_phases.len() > 1 {
+                // a rank's busy time: every phase but the exchanges (where it waits)
+                let busy: Vec<String> = r
+                    .rank_phases
+                    .iter()
+                    .map(|p| {
+                        let all: f64 = p.named().iter().map(|x| x.1).sum();
+                        format!("{:.1}", (all - p.comm) * per)
+                    })
+                    .collect();
+                let comm: Vec<String> = r
+                    .rank_phases
+                    .iter()
+                    .map(|p| format!("{:.1}", p.comm * per))
+                    .collect();
+                say!(
+                    "           by rank, ns per particle-step: busy {}, communication {}",
+                    busy.join(" / "),
+                    comm.join(" / ")
                 );
             }
             if let Some(t) = &r.traffic {
@@ -577,6 +602,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         seconds: secs,
                         cpu_seconds: cpu,
                         phases,
+                        rank_phases,
                         rebuilds,
                         traffic,
                     } = timed;
@@ -623,6 +649,11 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         }),
                         rebuilds: Some(rebuilds),
                         traffic,
+                        rank_phases: if world > 1 {
+                            rank_phases.into_iter().flatten().collect()
+                        } else {
+                            Vec::new()
+                        },
                     };
                     print_row(&row);
                     if world == 1 {
@@ -682,6 +713,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     per_particle: None,
                     rebuilds,
                     traffic: None,
+                    rank_phases: Vec::new(),
                 };
                 print_row(&row);
                 rows.push(row);

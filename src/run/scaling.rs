@@ -16,19 +16,20 @@
 //! - `M_b` messages per step, `B_b` bytes per step a brick receives: every step the ghosts'
 //!   positions from the neighbouring bricks (72 bytes per ghost, one message per neighbour)
 //!   and two all-reduces (the skin flag, 8 bytes; the plate forces' exact sum, 208 bytes:
-//!   about log2 R messages each), and a rebuild's three exchanges (the divergence check,
-//!   the migration, the ghosts: each an all-to-all of sizes and one of messages, R - 1
-//!   messages each) amortised over the measured steps between rebuilds;
+//!   about log2 R messages each), and a rebuild's messages amortised over the measured steps
+//!   between rebuilds: two all-reduces (the divergence check, the check that no particle
+//!   went beyond the neighbouring bricks) and, to each neighbouring brick, the migrants and
+//!   the ghosts (each a message of lengths and one of numbers);
 //! - `alpha` (latency per message) and `beta_inv` (time per byte): this machine's, measured
 //!   by the bench's link probe under `mpirun` ([`Link`]), or a cluster's, assumed.
 //!
-//! The rebuild's all-to-alls are what still grows with R: the model also gives the design
-//! that removes them (migrants and ghosts sent to neighbouring bricks only, the divergence
-//! check by an all-reduce), so the figure says what that change would buy before it is
-//! made. Until 2026-12-06 every step made two all-to-alls (a flag in every message) and
-//! every brick received every plate particle's force share to add them in id order (1.3 MB a
-//! step at 250,000 particles); the exact sum ([`crate::solver::shear::exact`]) and
-//! neighbour-only step messages replaced them.
+//! The model also gives the design before (a rebuild's migrants and ghosts by all-to-alls,
+//! R - 1 messages each of sizes and of records, until 2026-12-06): what the neighbour-only
+//! rebuild bought, as its predictions said before it was made. Until 2026-12-06 every step
+//! also made two all-to-alls (a flag in every message) and every brick received every plate
+//! particle's force share to add them in id order (1.3 MB a step at 250,000 particles); the
+//! exact sum ([`crate::solver::shear::exact`]) and neighbour-only step messages replaced
+//! them.
 
 use crate::solver::shear::bricks::Bricks;
 use crate::solver::shear::decompose::{censuses, Census, Link};
@@ -43,12 +44,16 @@ pub const CLUSTER: Link = Link {
     seconds_per_byte: 1.0e-10,
 };
 
-/// Collective all-to-all calls of a rebuild: the divergence check, the migration and the
-/// ghosts, each two (sizes, then the messages) ([`crate::solver::shear::decompose`]).
-const REBUILD_CALLS: f64 = 6.0;
-/// Messages of a rebuild with neighbour-only exchanges: the divergence check by an
-/// all-reduce (log2 R), the migration and the ghosts to each neighbour (two each).
-const REBUILD_NEIGHBOUR_EXCHANGES: f64 = 2.0;
+/// A rebuild's all-reduces (about log2 R messages each): the divergence check and the
+/// check that no migrant goes beyond the neighbouring bricks
+/// ([`crate::solver::shear::decompose`]).
+const REBUILD_REDUCES: f64 = 2.0;
+/// A rebuild's messages to each neighbouring brick: the migrants and the ghosts, each a
+/// message of lengths and one of numbers.
+const REBUILD_NEIGHBOUR_MESSAGES: f64 = 4.0;
+/// Before 2026-12-06: the migrants and the ghosts each by an all-to-all of sizes and one of
+/// records (R - 1 messages each), after the divergence check's all-reduce.
+const REBUILD_ALL_TO_ALL_CALLS: f64 = 4.0;
 
 /// Bytes per ghost sent every step: position, velocity, angular velocity.
 const GHOST_BYTES: f64 = 72.0;
@@ -95,16 +100,17 @@ pub struct ScalePoint {
     pub pair_overhead: f64,
     /// Bytes a brick receives per step (the most of any).
     pub bytes_per_step: f64,
-    /// Messages a brick sends per step as built, and with neighbour-only rebuilds.
+    /// Messages a brick sends per step as built, and with a rebuild's migrants and ghosts by
+    /// all-to-alls (the design before 2026-12-06).
     pub messages_built: f64,
-    pub messages_neighbour: f64,
+    pub messages_all_to_all: f64,
     /// Compute time per step of the slowest brick [s].
     pub compute_s: f64,
     /// Predicted time per step [s]: as built, on this machine's link (None without a probe)
-    /// and on [`CLUSTER`]'s; and with neighbour-only rebuilds on [`CLUSTER`]'s.
+    /// and on [`CLUSTER`]'s; and with all-to-all rebuilds on [`CLUSTER`]'s.
     pub here_built_s: Option<f64>,
     pub cluster_built_s: f64,
-    pub cluster_neighbour_s: f64,
+    pub cluster_all_to_all_s: f64,
 }
 
 /// The model's predictions and its check against what this machine ran.
@@ -183,14 +189,14 @@ fn point(
     };
     let log_r = (r as f64).log2();
     // a lone brick exchanges nothing
-    let (messages_built, messages_neighbour) = if r == 1 {
+    let (messages_built, messages_all_to_all) = if r == 1 {
         (0.0, 0.0)
     } else {
         let step = neighbours + 2.0 * log_r;
         let rebuild = |m: f64| m / k.steps_per_rebuild;
         (
-            step + rebuild(REBUILD_CALLS * others),
-            step + rebuild(log_r + REBUILD_NEIGHBOUR_EXCHANGES * neighbours),
+            step + rebuild(REBUILD_REDUCES * log_r + REBUILD_NEIGHBOUR_MESSAGES * neighbours),
+            step + rebuild(log_r + REBUILD_ALL_TO_ALL_CALLS * others),
         )
     };
     // each brick's compute time, and bytes received per step
@@ -227,11 +233,11 @@ fn point(
         pair_overhead: most(&c.pairs) as f64 / (pairs_total as f64 / r as f64),
         bytes_per_step,
         messages_built,
-        messages_neighbour,
+        messages_all_to_all,
         compute_s,
         here_built_s: link.map(|l| slowest(&l, messages_built)),
         cluster_built_s: slowest(&CLUSTER, messages_built),
-        cluster_neighbour_s: slowest(&CLUSTER, messages_neighbour),
+        cluster_all_to_all_s: slowest(&CLUSTER, messages_all_to_all),
     }
 }
 
@@ -257,7 +263,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
     )];
     out.push(
         "    ranks  bricks  particles/rank  ghosts/own  pair overhead  kB/step  msgs/step  \
-         speedup here  cluster as built  cluster, neighbour-only rebuilds"
+         speedup here  cluster as built  cluster, all-to-all rebuilds (before)"
             .into(),
     );
     for p in &s.points {
@@ -269,7 +275,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
             )
         };
         out.push(format!(
-            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.1}  {:>12}  {:>16}  {:>32}",
+            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.1}  {:>12}  {:>16}  {:>37}",
             p.ranks,
             p.bricks.0,
             p.bricks.1,
@@ -280,7 +286,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
             p.messages_built,
             p.here_built_s.map(speed).unwrap_or_else(|| "-".into()),
             speed(p.cluster_built_s),
-            speed(p.cluster_neighbour_s),
+            speed(p.cluster_all_to_all_s),
         ));
     }
     if !s.too_thin.is_empty() {
@@ -302,8 +308,9 @@ mod tests {
 
     /// The costs give back the 1-rank run's time per step; one brick exchanges nothing and
     /// takes that time; two bricks exchange as built (one ghost message and two all-reduces
-    /// a step, the rebuild's all-to-alls amortised) and receive the ghosts' bytes and the
-    /// all-reduces'; neighbour-only rebuilds send fewer messages only beyond a few bricks.
+    /// a step, the rebuild's messages amortised) and receive the ghosts' bytes and the
+    /// all-reduces'; the all-to-all rebuilds of before sent more messages beyond a few
+    /// bricks.
     #[test]
     fn the_model_gives_back_what_it_was_fitted_to() {
         let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
@@ -329,8 +336,11 @@ mod tests {
         let (one, two) = (&m.points[0], &m.points[1]);
         assert_eq!((one.messages_built, one.bytes_per_step), (0.0, 0.0));
         assert!((one.here_built_s.unwrap() / m.one_rank_s - 1.0).abs() < 1e-9);
-        // 2 x 1 bricks: one neighbour, two all-reduces of one message each
-        assert_eq!(two.messages_built, 1.0 + 2.0 + REBUILD_CALLS / 100.0);
+        // 2 x 1 bricks: one neighbour, two all-reduces of one message each; a rebuild every
+        // 100 steps: two all-reduces and 4 messages to the neighbour (before: one all-reduce
+        // and 4 all-to-alls of one message each)
+        assert_eq!(two.messages_built, 1.0 + 2.0 + (2.0 + 4.0) / 100.0);
+        assert_eq!(two.messages_all_to_all, 1.0 + 2.0 + (1.0 + 4.0) / 100.0);
         let (splits, _) = censuses(&s, &[2]);
         let cen = &splits[0].1;
         let bytes = (0..2)
@@ -340,8 +350,9 @@ mod tests {
         assert!(two.compute_s < m.one_rank_s && two.compute_s > 0.5 * m.one_rank_s);
         let m = model(&fit(&s, k, &[2, 16]), Some(link));
         let (two, sixteen) = (&m.points[0], &m.points[1]);
-        assert!(two.messages_neighbour <= two.messages_built + 1e-12);
-        assert!(sixteen.messages_neighbour < sixteen.messages_built);
-        assert!(sixteen.cluster_neighbour_s < sixteen.cluster_built_s);
+        // 16 bricks: 8 neighbours each, against 15 other bricks for an all-to-all
+        assert!(sixteen.messages_built < sixteen.messages_all_to_all);
+        assert!(sixteen.cluster_built_s < sixteen.cluster_all_to_all_s);
+        assert!(two.cluster_built_s > 0.0);
     }
 }

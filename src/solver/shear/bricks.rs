@@ -67,6 +67,32 @@ impl Bricks {
             || (gap(p[0], x0, x1, self.lx) <= cut && gap(p[2], z0, z1, self.lz) <= cut)
     }
 
+    /// The bricks near brick `b`, itself excluded, in increasing index: those within `cut`
+    /// of it along both periodic axes, the only ones that can hold its particles as ghosts
+    /// or receive them at a rebuild (a particle within `cut` of a brick has its owner within
+    /// `cut` of that brick). Symmetric: `a` is near `b` when `b` is near `a`. Measured from
+    /// the extents with a margin of 1e-9 of the box, so that round-off in a particle's gap
+    /// ([`Bricks::holds`]) never makes a brick hold a ghost of one not near it.
+    pub fn near(&self, b: usize, cut: f64) -> Vec<usize> {
+        let (bx, bz) = self.extent(b);
+        // distance along a periodic axis of length l between [a0, a1) and [c0, c1)
+        let gap = |a: [f64; 2], c: [f64; 2], l: f64| {
+            if a[0] < c[1] && c[0] < a[1] {
+                0.0
+            } else {
+                (c[0] - a[1]).rem_euclid(l).min((a[0] - c[1]).rem_euclid(l))
+            }
+        };
+        (0..self.count())
+            .filter(|&o| {
+                let (ox, oz) = self.extent(o);
+                o != b
+                    && gap(bx, ox, self.lx) <= cut + 1e-9 * self.lx
+                    && gap(bz, oz, self.lz) <= cut + 1e-9 * self.lz
+            })
+            .collect()
+    }
+
     /// Brick `b`'s particles in increasing id, and whether each is its own: those it owns and
     /// those within `cut` of it along both periodic axes (its ghosts).
     pub fn members(&self, b: usize, x: &[V3], cut: f64) -> (Vec<usize>, Vec<bool>) {
@@ -85,6 +111,55 @@ impl Bricks {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `near` is symmetric, never holds the brick itself, and contains every brick that
+    /// holds a ghost of a particle the brick owns (random points, every split up to 5 x 5,
+    /// cuts from a tenth of a brick to beyond a whole one); with a cut under a brick's width
+    /// a 4 x 4 split's brick has its 8 surrounding bricks near, not the other 7.
+    #[test]
+    fn near_bricks_are_all_that_can_hold_ghosts() {
+        let (lx, lz) = (4.0e-3, 2.4e-3);
+        let mut seed = 11u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let points: Vec<V3> = (0..400).map(|_| [next() * lx, 0.0, next() * lz]).collect();
+        for nx in 1..=5 {
+            for nz in 1..=5 {
+                let b = Bricks { nx, nz, lx, lz };
+                for cut in [0.1e-3, 0.3e-3, 0.9e-3, 2.5e-3] {
+                    for a in 0..b.count() {
+                        let near = b.near(a, cut);
+                        assert!(!near.contains(&a));
+                        for &o in &near {
+                            assert!(b.near(o, cut).contains(&a), "{nx}x{nz} cut {cut}: {a} {o}");
+                        }
+                        for p in points.iter().filter(|&&p| b.owner(p) == a) {
+                            for o in (0..b.count()).filter(|&o| o != a) {
+                                if b.holds(o, *p, cut) {
+                                    assert!(
+                                        near.contains(&o),
+                                        "{nx}x{nz} {p:?} in {a}, held by {o}"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let b = Bricks {
+            nx: 4,
+            nz: 4,
+            lx,
+            lz,
+        };
+        assert_eq!(b.near(0, 0.3e-3), vec![1, 3, 4, 5, 7, 12, 13, 15]);
+        assert_eq!(b.near(5, 0.3e-3), vec![0, 1, 2, 4, 6, 8, 9, 10]);
+    }
 
     /// The owner is the brick whose extent holds the wrapped position, at the extents' own
     /// edges too (each edge is the start of the next brick's extent), for every split.

@@ -32,7 +32,10 @@
 //!   brick with every per-particle state it carries (velocities, force, torque, rotation,
 //!   plate contact records) and the histories of its pairs (`migrate`), then each brick
 //!   sends its new own particles near another brick to it as ghosts (`border`) and lists its
-//!   pairs, giving each touching pair its history by the pair's ids.
+//!   pairs, giving each touching pair its history by the pair's ids. Both go as numbers
+//!   (every value exactly: [`Numbers`]) to the neighbouring bricks only ([`Bricks::near`]:
+//!   a particle moves less than the ghost cut between rebuilds), a message of lengths then
+//!   one of numbers, as LAMMPS' `exchange` and `borders` talk to their neighbours only.
 //! - **Errors** (a diverged particle, too many plate contacts) are agreed on: every brick
 //!   stops at the same step, the one that found it with its message.
 //!
@@ -46,6 +49,7 @@ use super::neighbor::{Carried, Members, NeighborList, Pair};
 use super::{PairState, ShearSim, WallSlots};
 use crate::error::{Error, Result};
 use crate::solver::contact::{ContactHistory, ForceData};
+use crate::solver::trimesh::TriContactRecord;
 use crate::solver::vec3::V3;
 use std::any::Any;
 use std::sync::{Arc, Barrier, Mutex};
@@ -326,33 +330,144 @@ impl Migrant {
     }
 }
 
-/// What one brick sends another at a rebuild: the particles moving there and the histories
-/// of their pairs (global ids).
-type Leaving = (Vec<Migrant>, Vec<((u32, u32), ContactHistory)>);
-
-/// A ghost as its owner sends it at a rebuild.
-#[derive(Clone, Copy, serde::Serialize, serde::Deserialize)]
-struct GhostRecord {
-    id: u32,
-    x: V3,
-    v: V3,
-    omega: V3,
-    radius: f64,
-    mass: f64,
+/// A value as the numbers a rebuild's messages carry (f64, as MPI moves them: every bit).
+/// Ids, counts and indices (below 2^32) and flags (0 or 1) are f64 exactly; reading them
+/// back checks that they are (a message is this code's own, so a wrong one is a bug, never
+/// an input).
+trait Numbers: Sized {
+    fn put(&self, out: &mut Vec<f64>);
+    fn take(r: &mut Reader) -> Self;
 }
 
-impl GhostRecord {
-    fn of(m: &Migrant) -> Self {
-        GhostRecord {
-            id: m.id,
-            x: m.x,
-            v: m.v,
-            omega: m.omega,
-            radius: m.radius,
-            mass: m.mass,
+/// Reads a message's numbers in order.
+struct Reader<'a> {
+    at: usize,
+    v: &'a [f64],
+}
+
+impl<'a> Reader<'a> {
+    fn new(v: &'a [f64]) -> Self {
+        Reader { at: 0, v }
+    }
+    fn done(&self) -> bool {
+        self.at == self.v.len()
+    }
+    fn f(&mut self) -> f64 {
+        let x = self.v[self.at];
+        self.at += 1;
+        x
+    }
+    fn v3(&mut self) -> V3 {
+        [self.f(), self.f(), self.f()]
+    }
+    /// A whole number below 2^32 sent as f64.
+    fn u32(&mut self) -> u32 {
+        let x = self.f();
+        assert!(
+            x >= 0.0 && x <= u32::MAX as f64 && x.fract() == 0.0,
+            "a count or id in a rebuild message, got {x}"
+        );
+        x as u32
+    }
+}
+
+fn put3(out: &mut Vec<f64>, v: &V3) {
+    out.extend_from_slice(v);
+}
+
+impl Numbers for ContactHistory {
+    fn put(&self, out: &mut Vec<f64>) {
+        put3(out, &self.shear);
+        put3(out, &self.r_torque);
+    }
+    fn take(r: &mut Reader) -> Self {
+        ContactHistory {
+            shear: r.v3(),
+            r_torque: r.v3(),
         }
     }
 }
+
+impl Numbers for TriContactRecord {
+    fn put(&self, out: &mut Vec<f64>) {
+        out.extend([
+            self.mesh as f64,
+            self.tri as f64,
+            f64::from(u8::from(self.keep)),
+        ]);
+        self.hist.put(out);
+        put3(out, &self.force);
+        put3(out, &self.torque);
+        out.push(f64::from(u8::from(self.face)));
+    }
+    fn take(r: &mut Reader) -> Self {
+        let mesh = u8::try_from(r.u32()).expect("a mesh index below 256");
+        let tri = r.u32();
+        let keep = r.u32() != 0;
+        TriContactRecord {
+            mesh,
+            tri,
+            keep,
+            hist: ContactHistory::take(r),
+            force: r.v3(),
+            torque: r.v3(),
+            face: r.u32() != 0,
+        }
+    }
+}
+
+impl Numbers for Migrant {
+    fn put(&self, out: &mut Vec<f64>) {
+        out.push(self.id as f64);
+        for v in [
+            &self.x,
+            &self.v,
+            &self.omega,
+            &self.f,
+            &self.torque,
+            &self.rotation,
+        ] {
+            put3(out, v);
+        }
+        out.extend([self.radius, self.mass, self.wall.rec.len() as f64]);
+        for rec in &self.wall.rec {
+            rec.put(out);
+        }
+    }
+    fn take(r: &mut Reader) -> Self {
+        let id = r.u32();
+        let (x, v, omega, f, torque, rotation) = (r.v3(), r.v3(), r.v3(), r.v3(), r.v3(), r.v3());
+        let (radius, mass) = (r.f(), r.f());
+        let n = r.u32();
+        let rec = (0..n).map(|_| TriContactRecord::take(r)).collect();
+        Migrant {
+            id,
+            x,
+            v,
+            omega,
+            f,
+            torque,
+            rotation,
+            radius,
+            mass,
+            wall: WallSlots { rec },
+        }
+    }
+}
+
+/// A pair history by its global ids, as a migrant carries it.
+impl Numbers for ((u32, u32), ContactHistory) {
+    fn put(&self, out: &mut Vec<f64>) {
+        out.extend([self.0 .0 as f64, self.0 .1 as f64]);
+        self.1.put(out);
+    }
+    fn take(r: &mut Reader) -> Self {
+        ((r.u32(), r.u32()), ContactHistory::take(r))
+    }
+}
+
+/// Numbers per ghost at a rebuild: id, position, velocity, angular velocity, radius, mass.
+const GHOST_NUMBERS: usize = 12;
 
 /// Where a particle of a brick comes from at a rebuild: its own particles after the
 /// migration (index in them), or the ghosts a rank sent (rank, index in its message).
@@ -381,6 +496,8 @@ pub struct Brick {
     me: usize,
     /// The ghost cutoff: `2 r_max + skin` over every particle of the run.
     cut: f64,
+    /// The bricks near this one ([`Bricks::near`]): the only ones it talks to at a rebuild.
+    near: Vec<usize>,
     /// Per rank, the local indices of own particles it holds as ghosts, in increasing id.
     send: Vec<Vec<u32>>,
     /// Per rank, the local indices of the ghosts it owns, in the order it sends them.
@@ -450,6 +567,7 @@ impl Brick {
             bricks,
             me,
             cut,
+            near: bricks.near(me, cut),
             send,
             recv,
             plates,
@@ -573,7 +691,7 @@ impl Brick {
             ghost: &self.sim.ghost,
         };
         let carried = self.sim.nl.take_carried(over);
-        let (mine, carried) = self.migrate(t, carried);
+        let (mine, carried) = self.migrate(t, carried)?;
         self.border(t, mine);
         let s = &mut self.sim;
         let over = Members {
@@ -592,13 +710,19 @@ impl Brick {
     /// brick's own particles after it, in increasing id (in the buffer kept from the last
     /// rebuild: no fresh pages at every rebuild), and the histories to carry into its new
     /// list (its own and those that came with its new particles).
-    fn migrate(&mut self, t: &impl Transport, mut carried: Carried) -> (Vec<Migrant>, Carried) {
+    fn migrate(
+        &mut self,
+        t: &impl Transport,
+        mut carried: Carried,
+    ) -> Result<(Vec<Migrant>, Carried)> {
         let s = &mut self.sim;
         let size = self.bricks.count();
-        let mut leaving: Vec<Leaving> = vec![Default::default(); size];
+        // per brick: the number of particles moving there, their numbers, then their pairs'
+        let mut people: Vec<Vec<f64>> = vec![vec![0.0]; size];
         let mut mine = std::mem::take(&mut self.mine);
         mine.clear();
         let mut gone = std::collections::HashMap::new();
+        let mut far = None;
         for q in 0..s.x.len() {
             if s.ghost[q] {
                 continue;
@@ -609,32 +733,83 @@ impl Brick {
             if to == self.me {
                 mine.push(m);
             } else {
+                if !self.near.contains(&to) {
+                    far.get_or_insert((m.id, to));
+                }
                 gone.insert(m.id, to);
-                leaving[to].0.push(m);
+                people[to][0] += 1.0;
+                m.put(&mut people[to]);
             }
+        }
+        // a particle beyond the neighbouring bricks moved more than the ghost cut since the
+        // last rebuild, which the skin/2 rule forbids unless it flew off: every brick stops
+        let mut failed = [u64::from(far.is_some())];
+        t.sum_u64(&mut failed);
+        if failed[0] != 0 {
+            let local = match far {
+                Some((id, to)) => Err(Error::Solver {
+                    step: s.step,
+                    msg: format!(
+                        "particle {} moved from brick {} to brick {to}, further than the \
+                         ghost cut between two neighbour rebuilds (the run is unstable)",
+                        id + 1,
+                        self.me
+                    ),
+                }),
+                None => Ok(()),
+            };
+            let said = all_gather(t, local.as_ref().err().map(|e| e.to_string()));
+            agree(local, said, s.step)?;
         }
         for (ij, h) in carried.ij.iter().zip(&carried.hist) {
             let a = gone.get(&ij.0);
             let b = gone.get(&ij.1).filter(|b| Some(*b) != a);
             for &to in a.into_iter().chain(b) {
-                leaving[to].1.push((*ij, *h));
+                (*ij, *h).put(&mut people[to]);
             }
         }
-        let got = t.exchange(leaving);
+        let got = self.swap_near(t, people);
         let staying = mine.len();
-        for (from, (people, hist)) in got.into_iter().enumerate() {
-            if from == self.me {
-                continue;
+        for msg in got.iter().filter(|m| !m.is_empty()) {
+            let mut r = Reader::new(msg);
+            let n = r.u32();
+            self.arrived += u64::from(n);
+            mine.extend((0..n).map(|_| Migrant::take(&mut r)));
+            let mut hist = Vec::new();
+            while !r.done() {
+                hist.push(<((u32, u32), ContactHistory)>::take(&mut r));
             }
-            self.arrived += people.len() as u64;
-            mine.extend(people);
             carried.merge(hist);
         }
         // the staying ones are in increasing id already (local order is id order)
         if mine.len() > staying {
             mine.sort_by_key(|m| m.id);
         }
-        (mine, carried)
+        Ok((mine, carried))
+    }
+
+    /// Sends `out[r]` to each brick r near this one and returns what each sent this one
+    /// (empty from the others): the lengths first, then the numbers, both by
+    /// [`Transport::exchange_f64`] between neighbouring bricks only.
+    fn swap_near(&self, t: &impl Transport, mut out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+        let size = self.bricks.count();
+        let (mut lengths, mut got) = (vec![Vec::new(); size], vec![Vec::new(); size]);
+        for &r in &self.near {
+            lengths[r] = vec![out[r].len() as f64];
+            got[r] = vec![0.0];
+        }
+        t.exchange_f64(&lengths, &mut got);
+        let mut theirs = vec![Vec::new(); size];
+        for &r in &self.near {
+            theirs[r] = vec![0.0; Reader::new(&got[r]).u32() as usize];
+        }
+        for (r, m) in out.iter_mut().enumerate() {
+            if !self.near.contains(&r) {
+                m.clear();
+            }
+        }
+        t.exchange_f64(&out, &mut theirs);
+        theirs
     }
 
     /// Sends each own particle to every other brick it is near as a ghost (LAMMPS
@@ -642,25 +817,35 @@ impl Brick {
     /// received, in increasing id, with the send and receive lists of `forward`.
     fn border(&mut self, t: &impl Transport, mut mine: Vec<Migrant>) {
         let size = self.bricks.count();
-        let mut out: Vec<Vec<GhostRecord>> = vec![Vec::new(); size];
+        let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
+        let mut sent: Vec<Vec<u32>> = vec![Vec::new(); size];
         for m in &mine {
-            for (b, list) in out.iter_mut().enumerate() {
-                if b != self.me && self.bricks.holds(b, m.x, self.cut) {
-                    list.push(GhostRecord::of(m));
+            for &b in &self.near {
+                if self.bricks.holds(b, m.x, self.cut) {
+                    out[b].push(m.id as f64);
+                    for v in [&m.x, &m.v, &m.omega] {
+                        put3(&mut out[b], v);
+                    }
+                    out[b].extend([m.radius, m.mass]);
+                    sent[b].push(m.id);
                 }
             }
         }
-        let sent: Vec<Vec<u32>> = out
-            .iter()
-            .map(|l| l.iter().map(|g| g.id).collect())
-            .collect();
-        let got = t.exchange(out);
+        let got = self.swap_near(t, out);
         // every particle once, in increasing id: where it comes from
         let mut order = std::mem::take(&mut self.order);
         order.clear();
         order.extend((0..mine.len()).map(|k| (mine[k].id, Held::Own(k as u32))));
         for (r, l) in got.iter().enumerate() {
-            order.extend((0..l.len()).map(|k| (l[k].id, Held::Ghost(r as u32, k as u32))));
+            assert_eq!(
+                l.len() % GHOST_NUMBERS,
+                0,
+                "whole ghost records from brick {r}"
+            );
+            order.extend(l.chunks_exact(GHOST_NUMBERS).enumerate().map(|(k, g)| {
+                let id = Reader::new(&g[..1]).u32();
+                (id, Held::Ghost(r as u32, k as u32))
+            }));
         }
         order.sort_by_key(|e| e.0);
         self.recv = vec![Vec::new(); size];
@@ -693,16 +878,17 @@ impl Brick {
                 }
                 Held::Ghost(from, k) => {
                     self.recv[from as usize].push(l as u32);
-                    let g = &got[from as usize][k as usize];
+                    let at = GHOST_NUMBERS * k as usize;
+                    let mut g = Reader::new(&got[from as usize][at + 1..at + GHOST_NUMBERS]);
                     let z = [0.0; 3];
-                    s.x.push(g.x);
-                    s.v.push(g.v);
-                    s.omega.push(g.omega);
+                    s.x.push(g.v3());
+                    s.v.push(g.v3());
+                    s.omega.push(g.v3());
                     s.f.push(z);
                     s.torque.push(z);
                     s.rotation.push(z);
-                    s.radius.push(g.radius);
-                    s.mass.push(g.mass);
+                    s.radius.push(g.f());
+                    s.mass.push(g.f());
                     s.wall.push(WallSlots::default());
                 }
             }
@@ -855,6 +1041,11 @@ pub trait Stepper {
     fn local(&mut self) -> &mut ShearSim;
     /// What the transport carried so far (None: one process, or not counted).
     fn traffic(&self) -> Option<Traffic>;
+    /// Every brick's phase times, by rank (collective for bricks): where the waits of a
+    /// decomposed run come from (a brick busier than the others).
+    fn phases_by_rank(&mut self) -> Vec<Option<super::PhaseTimes>> {
+        vec![self.local().phase_times()]
+    }
 }
 
 impl Stepper for ShearSim {
@@ -922,6 +1113,10 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
 
     fn traffic(&self) -> Option<Traffic> {
         self.transport.traffic()
+    }
+
+    fn phases_by_rank(&mut self) -> Vec<Option<super::PhaseTimes>> {
+        all_gather(self.transport, self.brick.sim.phase_times())
     }
 }
 
@@ -1227,6 +1422,61 @@ mod tests {
             ends[1].1.contains("another brick stopped") && ends[1].1.contains(&said),
             "{ends:?}"
         );
+    }
+
+    /// A particle that jumps beyond the neighbouring bricks between two rebuilds (which the
+    /// skin/2 rule forbids unless it flew off) stops every brick at that rebuild, the one it
+    /// left saying where it went, instead of a message no brick waits for: the rebuild's
+    /// messages go to the neighbouring bricks only.
+    #[test]
+    fn a_particle_beyond_the_neighbouring_bricks_stops_every_brick() {
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 3).unwrap();
+        c.particles = 120;
+        let mut global = ShearSim::new(&c.setup(), &loose_packing(&c));
+        global.setup(0.0).unwrap();
+        let (lx, lz) = (global.box_.lx, global.box_.lz);
+        let bricks = Bricks {
+            nx: 4,
+            nz: 1,
+            lx,
+            lz,
+        };
+        let cut = global.ghost_cut();
+        assert_eq!(
+            bricks.near(0, cut),
+            vec![1, 3],
+            "cut {cut} for bricks {} wide",
+            lx / 4.0
+        );
+        let mut b = [0, 1, 2, 3].map(|r| Brick::of(&global, bricks, r));
+        let l = (0..b[0].sim.ids.len())
+            .find(|&l| !b[0].sim.ghost[l])
+            .expect("an own particle");
+        let id = b[0].sim.ids[l];
+        // two bricks on: from brick 0 to brick 2
+        b[0].sim.x[l][0] += lx / 2.0;
+        let ends: Vec<(u64, String)> = std::thread::scope(|scope| {
+            let runs: Vec<_> = InProcess::group(4)
+                .into_iter()
+                .zip(b.iter_mut())
+                .map(|(t, b)| {
+                    scope.spawn(move || match b.step(&t) {
+                        Err(e) => (b.sim.step, e.to_string()),
+                        Ok(()) => (b.sim.step, String::new()),
+                    })
+                })
+                .collect();
+            runs.into_iter().map(|r| r.join().unwrap()).collect()
+        });
+        let said = format!("particle {} moved from brick 0 to brick 2", id + 1);
+        assert!(ends.iter().all(|e| e.0 == ends[0].0), "{ends:?}");
+        assert!(ends[0].1.contains(&said), "{ends:?}");
+        for e in &ends[1..] {
+            assert!(
+                e.1.contains("another brick stopped") && e.1.contains(&said),
+                "{ends:?}"
+            );
+        }
     }
 
     /// Bricks split the longer side first: the least boundary between them.

@@ -526,11 +526,17 @@ impl ShearSim {
                 for (k, ((((f, tq), kick), hold), (((x, v), w), rot))) in
                     inputs.zip(states).enumerate()
                 {
+                    // a brick's ghosts are not drifted: `forward` overwrites their x, v and
+                    // omega with their owners' drifted values before anything reads them
+                    // (their rotation is never read), and their skin test is their owner's
+                    if ghost.get(k) == Some(&true) {
+                        continue;
+                    }
                     nve.initial_kicked(x, v, w, *f, *tq, *kick);
                     for c in 0..3 {
                         rot[c] += w[c] * dt;
                     }
-                    moved |= moved_beyond_half_skin(*x, *hold, skin) && ghost.get(k) != Some(&true);
+                    moved |= moved_beyond_half_skin(*x, *hold, skin);
                     if let Some(p) = packed.get_mut(k) {
                         p.moved(*x, *v, *w);
                     }
