@@ -112,6 +112,16 @@ impl Bricks {
 mod tests {
     use super::*;
 
+    /// Uniform numbers in [0, 1) from `seed` (a 64-bit LCG: tests only).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
     /// `near` is symmetric, never holds the brick itself, and contains every brick that
     /// holds a ghost of a particle the brick owns (random points, every split up to 5 x 5,
     /// cuts from a tenth of a brick to beyond a whole one); with a cut under a brick's width
@@ -119,13 +129,7 @@ mod tests {
     #[test]
     fn near_bricks_are_all_that_can_hold_ghosts() {
         let (lx, lz) = (4.0e-3, 2.4e-3);
-        let mut seed = 11u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(11);
         let points: Vec<V3> = (0..400).map(|_| [next() * lx, 0.0, next() * lz]).collect();
         for nx in 1..=5 {
             for nz in 1..=5 {
@@ -166,13 +170,7 @@ mod tests {
     #[test]
     fn the_owner_is_the_brick_whose_extent_holds_the_point() {
         let (lx, lz) = (4.0e-3, 2.4e-3);
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = uniform(7);
         for nx in 1..=5 {
             for nz in 1..=5 {
                 let b = Bricks { nx, nz, lx, lz };

@@ -1377,16 +1377,22 @@ mod tests {
         (one.expect("rank 0 gathers"), moved)
     }
 
+    /// 120 particles of the ci preset, loose, after the run's setup.
+    fn loose_ci_120() -> ShearSim {
+        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 3).unwrap();
+        c.particles = 120;
+        let mut global = ShearSim::new(&c.setup(), &loose_packing(&c));
+        global.setup(0.0).unwrap();
+        global
+    }
+
     /// A particle blown up in one brick (held by no other) stops every brick at the same
     /// rebuild: the one that holds it with the particle's message, the other saying another
     /// brick stopped, with that message (the failure flag summed over the bricks, the
     /// messages gathered).
     #[test]
     fn a_blown_up_particle_stops_every_brick_at_the_same_step() {
-        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 3).unwrap();
-        c.particles = 120;
-        let mut global = ShearSim::new(&c.setup(), &loose_packing(&c));
-        global.setup(0.0).unwrap();
+        let global = loose_ci_120();
         let bricks = split_for(2, global.box_.lx, global.box_.lz);
         let mut b = [0, 1].map(|r| Brick::of(&global, bricks, r));
         // a particle of brick 0 that brick 1 does not hold as a ghost
@@ -1430,10 +1436,7 @@ mod tests {
     /// messages go to the neighbouring bricks only.
     #[test]
     fn a_particle_beyond_the_neighbouring_bricks_stops_every_brick() {
-        let mut c = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.0, 3).unwrap();
-        c.particles = 120;
-        let mut global = ShearSim::new(&c.setup(), &loose_packing(&c));
-        global.setup(0.0).unwrap();
+        let global = loose_ci_120();
         let (lx, lz) = (global.box_.lx, global.box_.lz);
         let bricks = Bricks {
             nx: 4,
