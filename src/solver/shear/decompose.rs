@@ -741,26 +741,7 @@ impl Brick {
                 m.put(&mut people[to]);
             }
         }
-        // a particle beyond the neighbouring bricks moved more than the ghost cut since the
-        // last rebuild, which the skin/2 rule forbids unless it flew off: every brick stops
-        let mut failed = [u64::from(far.is_some())];
-        t.sum_u64(&mut failed);
-        if failed[0] != 0 {
-            let local = match far {
-                Some((id, to)) => Err(Error::Solver {
-                    step: s.step,
-                    msg: format!(
-                        "particle {} moved from brick {} to brick {to}, further than the \
-                         ghost cut between two neighbour rebuilds (the run is unstable)",
-                        id + 1,
-                        self.me
-                    ),
-                }),
-                None => Ok(()),
-            };
-            let said = all_gather(t, local.as_ref().err().map(|e| e.to_string()));
-            agree(local, said, s.step)?;
-        }
+        Self::none_beyond_the_neighbours(t, far, self.me, s.step)?;
         for (ij, h) in carried.ij.iter().zip(&carried.hist) {
             let a = gone.get(&ij.0);
             let b = gone.get(&ij.1).filter(|b| Some(*b) != a);
@@ -786,6 +767,36 @@ impl Brick {
             mine.sort_by_key(|m| m.id);
         }
         Ok((mine, carried))
+    }
+
+    /// Every brick stops when one of them has a migrant `far` (its id, its new brick) beyond
+    /// the neighbouring bricks: it moved more than the ghost cut since the last rebuild,
+    /// which the skin/2 rule forbids unless it flew off (one summed word; the message
+    /// gathered only then).
+    fn none_beyond_the_neighbours(
+        t: &impl Transport,
+        far: Option<(u32, usize)>,
+        me: usize,
+        step: u64,
+    ) -> Result<()> {
+        let mut failed = [u64::from(far.is_some())];
+        t.sum_u64(&mut failed);
+        if failed[0] == 0 {
+            return Ok(());
+        }
+        let local = match far {
+            Some((id, to)) => Err(Error::Solver {
+                step,
+                msg: format!(
+                    "particle {} moved from brick {me} to brick {to}, further than the ghost \
+                     cut between two neighbour rebuilds (the run is unstable)",
+                    id + 1
+                ),
+            }),
+            None => Ok(()),
+        };
+        let said = all_gather(t, local.as_ref().err().map(|e| e.to_string()));
+        agree(local, said, step)
     }
 
     /// Sends `out[r]` to each brick r near this one and returns what each sent this one
@@ -817,37 +828,10 @@ impl Brick {
     /// received, in increasing id, with the send and receive lists of `forward`.
     fn border(&mut self, t: &impl Transport, mut mine: Vec<Migrant>) {
         let size = self.bricks.count();
-        let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
-        let mut sent: Vec<Vec<u32>> = vec![Vec::new(); size];
-        for m in &mine {
-            for &b in &self.near {
-                if self.bricks.holds(b, m.x, self.cut) {
-                    out[b].push(m.id as f64);
-                    for v in [&m.x, &m.v, &m.omega] {
-                        put3(&mut out[b], v);
-                    }
-                    out[b].extend([m.radius, m.mass]);
-                    sent[b].push(m.id);
-                }
-            }
-        }
+        let (out, sent) = self.ghost_messages(&mine);
         let got = self.swap_near(t, out);
-        // every particle once, in increasing id: where it comes from
         let mut order = std::mem::take(&mut self.order);
-        order.clear();
-        order.extend((0..mine.len()).map(|k| (mine[k].id, Held::Own(k as u32))));
-        for (r, l) in got.iter().enumerate() {
-            assert_eq!(
-                l.len() % GHOST_NUMBERS,
-                0,
-                "whole ghost records from brick {r}"
-            );
-            order.extend(l.chunks_exact(GHOST_NUMBERS).enumerate().map(|(k, g)| {
-                let id = Reader::new(&g[..1]).u32();
-                (id, Held::Ghost(r as u32, k as u32))
-            }));
-        }
-        order.sort_by_key(|e| e.0);
+        held_in_id_order(&mut order, &mine, &got);
         self.recv = vec![Vec::new(); size];
         let s = &mut self.sim;
         s.ids.clear();
@@ -911,6 +895,28 @@ impl Brick {
         mine.clear();
         self.mine = mine;
         self.order = order;
+    }
+
+    /// The ghost records of `mine` (this brick's own particles after the migration) for
+    /// each neighbouring brick that holds them ([`GHOST_NUMBERS`] numbers each), and their
+    /// ids per brick, in increasing id.
+    fn ghost_messages(&self, mine: &[Migrant]) -> (Vec<Vec<f64>>, Vec<Vec<u32>>) {
+        let size = self.bricks.count();
+        let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
+        let mut sent: Vec<Vec<u32>> = vec![Vec::new(); size];
+        for m in mine {
+            for &b in &self.near {
+                if self.bricks.holds(b, m.x, self.cut) {
+                    out[b].push(m.id as f64);
+                    for v in [&m.x, &m.v, &m.omega] {
+                        put3(&mut out[b], v);
+                    }
+                    out[b].extend([m.radius, m.mass]);
+                    sent[b].push(m.id);
+                }
+            }
+        }
+        (out, sent)
     }
 
     /// The whole state, on rank 0 (None on the others: no rank but the writing one holds
@@ -1203,6 +1209,25 @@ fn ghost_lists(
         }
     }
     (send, recv)
+}
+
+/// Every particle a brick holds once, in increasing id, with where it comes from: its own
+/// particles `mine` and the ghost records `got[r]` from each brick r (into `order`, cleared).
+fn held_in_id_order(order: &mut Vec<(u32, Held)>, mine: &[Migrant], got: &[Vec<f64>]) {
+    order.clear();
+    order.extend((0..mine.len()).map(|k| (mine[k].id, Held::Own(k as u32))));
+    for (r, l) in got.iter().enumerate() {
+        assert_eq!(
+            l.len() % GHOST_NUMBERS,
+            0,
+            "whole ghost records from brick {r}"
+        );
+        order.extend(l.chunks_exact(GHOST_NUMBERS).enumerate().map(|(k, g)| {
+            let id = Reader::new(&g[..1]).u32();
+            (id, Held::Ghost(r as u32, k as u32))
+        }));
+    }
+    order.sort_by_key(|e| e.0);
 }
 
 /// A brick's own particles with plate candidates (local indices, increasing id): its share
