@@ -718,7 +718,10 @@ impl Brick {
         let s = &mut self.sim;
         let size = self.bricks.count();
         // per brick: the number of particles moving there, their numbers, then their pairs'
-        let mut people: Vec<Vec<f64>> = vec![vec![0.0]; size];
+        let mut people: Vec<Vec<f64>> = vec![Vec::new(); size];
+        for &r in &self.near {
+            people[r].push(0.0);
+        }
         let mut mine = std::mem::take(&mut self.mine);
         mine.clear();
         let mut gone = std::collections::HashMap::new();
@@ -734,7 +737,9 @@ impl Brick {
                 mine.push(m);
             } else {
                 if !self.near.contains(&to) {
+                    // stops every brick below, before any message is sent
                     far.get_or_insert((m.id, to));
+                    continue;
                 }
                 gone.insert(m.id, to);
                 people[to][0] += 1.0;
@@ -799,10 +804,10 @@ impl Brick {
         agree(local, said, step)
     }
 
-    /// Sends `out[r]` to each brick r near this one and returns what each sent this one
-    /// (empty from the others): the lengths first, then the numbers, both by
-    /// [`Transport::exchange_f64`] between neighbouring bricks only.
-    fn swap_near(&self, t: &impl Transport, mut out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    /// Sends `out[r]` to each brick r near this one (`out` is empty for every other brick)
+    /// and returns what each sent this one (empty from the others): the lengths first, then
+    /// the numbers, both by [`Transport::exchange_f64`] between neighbouring bricks only.
+    fn swap_near(&self, t: &impl Transport, out: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
         let size = self.bricks.count();
         let (mut lengths, mut got) = (vec![Vec::new(); size], vec![Vec::new(); size]);
         for &r in &self.near {
@@ -814,11 +819,10 @@ impl Brick {
         for &r in &self.near {
             theirs[r] = vec![0.0; Reader::new(&got[r]).u32() as usize];
         }
-        for (r, m) in out.iter_mut().enumerate() {
-            if !self.near.contains(&r) {
-                m.clear();
-            }
-        }
+        debug_assert!(
+            (0..size).all(|r| self.near.contains(&r) || out[r].is_empty()),
+            "messages to neighbouring bricks only"
+        );
         t.exchange_f64(&out, &mut theirs);
         theirs
     }
