@@ -353,7 +353,7 @@ fn step_native<R>(
             job.threads
         ));
         let mut stepper = BrickRun {
-            brick: Brick::of(&job.sim, bricks, 0),
+            brick: Brick::of(&job.sim, &bricks, 0),
             transport: &world,
         };
         drop(job);
@@ -396,7 +396,7 @@ pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
         pool.install(|| {
             let world = crate::solver::shear::mpi::Mpi::world();
             let mut stepper = BrickRun {
-                brick: Brick::of(&job.sim, bricks, world.rank()),
+                brick: Brick::of(&job.sim, &bricks, world.rank()),
                 transport: &world,
             };
             // rank 0 reports the outcome; an error is every rank's (agreed on)
@@ -429,6 +429,8 @@ pub struct Timed {
     pub phases: Option<PhaseTimes>,
     /// Every rank's phases (decomposed; one process: its own).
     pub rank_phases: Vec<Option<PhaseTimes>>,
+    /// Every rank's own particles at the end (decomposed; one process: all).
+    pub rank_particles: Vec<u64>,
     pub rebuilds: u64,
     pub traffic: Option<Traffic>,
 }
@@ -465,12 +467,14 @@ pub fn timed_steps(s: &mut dyn Stepper, t: crate::ranks::Timing) -> Result<Timed
     let seconds = t0.elapsed().as_secs_f64();
     let cpu_seconds = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
     let rank_phases = s.phases_by_rank();
+    let rank_particles = s.own_by_rank();
     let local = s.local();
     local.check_finite()?;
     Ok(Timed {
         seconds,
         cpu_seconds,
         rank_phases,
+        rank_particles,
         phases: local.phase_times(),
         rebuilds: local.neighbor_builds() - builds0,
         traffic: s.traffic().zip(traffic0).map(|(b, a)| b.since(&a)),

@@ -109,6 +109,10 @@ pub struct BenchRow {
     /// busier than the others makes them wait in `comm`.
     #[serde(default)]
     pub rank_phases: Vec<PhaseTimes>,
+    /// Native over ranks: every rank's own particles at the end, by rank (where the
+    /// balance by measured time put the cuts).
+    #[serde(default)]
+    pub rank_particles: Vec<u64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -338,6 +342,12 @@ fn print_row(r: &BenchRow) {
                     "           by rank, ns per particle-step: busy {}, communication {}",
                     busy.join(" / "),
                     comm.join(" / ")
+                );
+                let own: Vec<String> = r.rank_particles.iter().map(|n| n.to_string()).collect();
+                say!(
+                    "           own particles by rank at the end (bricks balanced by measured \
+                     time): {}",
+                    own.join(" / ")
                 );
             }
             if let Some(t) = &r.traffic {
@@ -603,6 +613,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         cpu_seconds: cpu,
                         phases,
                         rank_phases,
+                        rank_particles,
                         rebuilds,
                         traffic,
                     } = timed;
@@ -651,6 +662,11 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                         traffic,
                         rank_phases: if world > 1 {
                             rank_phases.into_iter().flatten().collect()
+                        } else {
+                            Vec::new()
+                        },
+                        rank_particles: if world > 1 {
+                            rank_particles
                         } else {
                             Vec::new()
                         },
@@ -714,6 +730,7 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
                     rebuilds,
                     traffic: None,
                     rank_phases: Vec::new(),
+                    rank_particles: Vec::new(),
                 };
                 print_row(&row);
                 rows.push(row);

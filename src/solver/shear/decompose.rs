@@ -53,6 +53,7 @@ use crate::solver::trimesh::TriContactRecord;
 use crate::solver::vec3::V3;
 use std::any::Any;
 use std::sync::{Arc, Barrier, Mutex};
+use std::time::Instant;
 
 /// What may travel between bricks: anything an MPI transport can serialise and the
 /// in-process one can move.
@@ -251,7 +252,7 @@ pub struct Census {
 
 /// The [`Census`] of `s` split into `bricks`, by the rule the bricks are made by
 /// ([`Brick::of`]: ownership and ghosts from `xhold`, the cut `2 r_max + skin`).
-pub fn census(s: &ShearSim, bricks: Bricks) -> Census {
+pub fn census(s: &ShearSim, bricks: &Bricks) -> Census {
     let cut = s.ghost_cut();
     let n = bricks.count();
     let owner: Vec<usize> = s.xhold.iter().map(|&p| bricks.owner(p)).collect();
@@ -291,7 +292,8 @@ pub fn censuses(s: &ShearSim, ranks: &[usize]) -> (Vec<(Bricks, Census)>, Vec<us
         if b.lx / b.nx as f64 <= cut || b.lz / b.nz as f64 <= cut {
             thin.push(r);
         } else {
-            splits.push((b, census(s, b)));
+            let c = census(s, &b);
+            splits.push((b, c));
         }
     }
     (splits, thin)
@@ -515,12 +517,19 @@ pub struct Brick {
     /// of megabytes of fresh pages at 250,000 particles.
     mine: Vec<Migrant>,
     order: Vec<(u32, Held)>,
+    /// This brick's time in the work that grows with its particles (drift, forces, the
+    /// step's finish) since the last rebuild [ns], which the next rebuild balances the
+    /// bricks by ([`Bricks::balanced`]).
+    busy_ns: u64,
+    /// What the busy time counts for in the balance (1: as measured; tests make one brick
+    /// count more, as if something else slowed it).
+    pub cost_factor: f64,
 }
 
 impl Brick {
     /// Brick `me` of `bricks` from the whole state `global` as it is (its own particles and
     /// ghosts as the last rebuild chose them, from the positions then, `xhold`; no rebuild).
-    pub fn of(global: &ShearSim, bricks: Bricks, me: usize) -> Brick {
+    pub fn of(global: &ShearSim, bricks: &Bricks, me: usize) -> Brick {
         let cut = global.ghost_cut();
         let held = global.xhold.clone();
         let (ids, own) = bricks.members(me, &held, cut);
@@ -561,13 +570,14 @@ impl Brick {
         sim.size_particle_buffers(n);
         sim.size_pair_buffers();
         let (send, recv) = ghost_lists(bricks, me, &ids, &own, &held, cut);
+        let near = bricks.near(me, cut);
         let plates = own_with_candidates(&sim);
         let mut b = Brick {
             sim,
-            bricks,
+            bricks: bricks.clone(),
             me,
             cut,
-            near: bricks.near(me, cut),
+            near,
             send,
             recv,
             plates,
@@ -576,6 +586,8 @@ impl Brick {
             arrived: 0,
             mine: Vec::new(),
             order: Vec::new(),
+            busy_ns: 0,
+            cost_factor: 1.0,
         };
         b.size_messages();
         b
@@ -600,7 +612,9 @@ impl Brick {
 
     /// One time step ([`ShearSim::step`]) in every brick.
     pub fn step(&mut self, t: &impl Transport) -> Result<()> {
+        let start = Instant::now();
         let moved = self.sim.drift();
+        self.count_busy(start);
         let moved = self.forward(t, moved);
         self.sim.lap(|p| &mut p.comm);
         self.sim.move_plates();
@@ -611,10 +625,19 @@ impl Brick {
             self.sim.mesh_rebuild_pending = self.sim.plates_moved();
         }
         self.sim.lap(|p| &mut p.neighbor);
+        let start = Instant::now();
         let local = self.sim.forces_of_step();
+        self.count_busy(start);
         let kicked = self.plate_forces(t, local)?;
+        let start = Instant::now();
         self.sim.finish_step(kicked);
+        self.count_busy(start);
         Ok(())
+    }
+
+    fn count_busy(&mut self, since: Instant) {
+        let ns = since.elapsed().as_nanos() as f64 * self.cost_factor;
+        self.busy_ns = self.busy_ns.saturating_add(ns as u64);
     }
 
     /// The ghosts' positions and velocities from their owners (LAMMPS `forward_comm`), after
@@ -678,12 +701,22 @@ impl Brick {
     fn rebuild(&mut self, t: &impl Transport) -> Result<()> {
         let team = self.sim.team();
         let checked = self.sim.check_diverged(&team);
-        // one word summed over the bricks; the messages gathered only when one failed
-        let mut failed = [u64::from(checked.is_err())];
-        t.sum_u64(&mut failed);
-        if failed[0] != 0 {
+        // one word summed over the bricks, the messages gathered only when one failed; in
+        // the same all-reduce every brick's busy time (its own word, the others zero)
+        let size = self.bricks.count();
+        let mut words = vec![0u64; 1 + size];
+        words[0] = u64::from(checked.is_err());
+        words[1 + self.me] = std::mem::take(&mut self.busy_ns);
+        t.sum_u64(&mut words);
+        if words[0] != 0 {
             let said = all_gather(t, checked.as_ref().err().map(|e| e.to_string()));
             agree(checked, said, self.sim.step)?;
+        }
+        let cost: Vec<f64> = words[1..].iter().map(|&ns| ns as f64).collect();
+        let moved = self.bricks.balanced(&cost);
+        if moved != self.bricks {
+            self.near = moved.near(self.me, self.cut);
+            self.bricks = moved;
         }
         self.sim.wrap();
         let over = Members {
@@ -1056,6 +1089,12 @@ pub trait Stepper {
     fn phases_by_rank(&mut self) -> Vec<Option<super::PhaseTimes>> {
         vec![self.local().phase_times()]
     }
+    /// Every brick's own particles, by rank (collective for bricks): where the balance
+    /// ([`Bricks::balanced`]) put the cuts.
+    fn own_by_rank(&mut self) -> Vec<u64> {
+        let s = self.local();
+        vec![(s.x.len() - s.ghost.iter().filter(|g| **g).count()) as u64]
+    }
 }
 
 impl Stepper for ShearSim {
@@ -1128,6 +1167,11 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
     fn phases_by_rank(&mut self) -> Vec<Option<super::PhaseTimes>> {
         all_gather(self.transport, self.brick.sim.phase_times())
     }
+
+    fn own_by_rank(&mut self) -> Vec<u64> {
+        let own = self.brick.sim.ghost.iter().filter(|g| !**g).count();
+        all_gather(self.transport, own as u64)
+    }
 }
 
 /// The split of a box `lx` x `lz` into `ranks` bricks with the least boundary between them
@@ -1141,7 +1185,7 @@ pub fn split_for(ranks: usize, lx: f64, lz: f64) -> Bricks {
             cost(*a).total_cmp(&cost(*b))
         })
         .unwrap_or((1, 1));
-    Bricks { nx, nz, lx, lz }
+    Bricks::equal(nx, nz, lx, lz)
 }
 /// Brick [`Brick::of`]'s pairs: those of `global`'s list with an own member, in list order
 /// (increasing key: local order is id order), their histories with them; `ids` the brick's
@@ -1192,7 +1236,7 @@ fn local_plate_candidates(
 /// last rebuild `held` (the same rule on every brick): per rank, the local indices of own
 /// particles it holds as ghosts, and of the ghosts it owns.
 fn ghost_lists(
-    bricks: Bricks,
+    bricks: &Bricks,
     me: usize,
     ids: &[usize],
     own: &[bool],
@@ -1364,28 +1408,28 @@ mod tests {
     use crate::spec::shear::{Preset, ShearCase};
 
     /// `global` run as `nx` x `nz` bricks (threads of this process, each with `threads`
-    /// threads of its own): with `speed` a run's setup first, then `steps` steps; the whole
-    /// state gathered, and how many particles changed brick.
+    /// threads of its own; brick 0's time counting `slow` times in the balance): with
+    /// `speed` a run's setup first, then `steps` steps; the whole state gathered, how many
+    /// particles changed brick, and the bricks at the end.
     fn in_bricks(
         global: &ShearSim,
         (nx, nz): (usize, usize),
         threads: usize,
+        slow: f64,
         speed: Option<f64>,
         steps: u64,
-    ) -> (ShearSim, u64) {
-        let bricks = Bricks {
-            nx,
-            nz,
-            lx: global.box_.lx,
-            lz: global.box_.lz,
-        };
-        let ends: Vec<(Option<ShearSim>, u64)> = std::thread::scope(|scope| {
+    ) -> (ShearSim, u64, Bricks) {
+        let bricks = &Bricks::equal(nx, nz, global.box_.lx, global.box_.lz);
+        let ends: Vec<(Option<ShearSim>, u64, Bricks)> = std::thread::scope(|scope| {
             let runs: Vec<_> = InProcess::group(bricks.count())
                 .into_iter()
                 .map(|t| {
                     scope.spawn(move || {
                         on_threads(threads, || {
                             let mut b = Brick::of(global, bricks, t.rank());
+                            if t.rank() == 0 {
+                                b.cost_factor = slow;
+                            }
                             if let Some(v) = speed {
                                 b.setup(&t, v).unwrap();
                             }
@@ -1393,17 +1437,19 @@ mod tests {
                                 b.step(&t).unwrap();
                             }
                             let moved = all_gather(&t, b.arrived).iter().sum();
-                            (b.gather(&t), moved)
+                            (b.gather(&t), moved, b.bricks.clone())
                         })
                     })
                 })
                 .collect();
             runs.into_iter().map(|r| r.join().unwrap()).collect()
         });
-        // the whole state on rank 0 alone
-        assert!(ends[1..].iter().all(|(w, _)| w.is_none()));
-        let (one, moved) = ends.into_iter().next().unwrap();
-        (one.expect("rank 0 gathers"), moved)
+        // the whole state on rank 0 alone; every brick with the same bricks
+        assert!(ends[1..]
+            .iter()
+            .all(|(w, _, b)| w.is_none() && *b == ends[0].2));
+        let (one, moved, end) = ends.into_iter().next().unwrap();
+        (one.expect("rank 0 gathers"), moved, end)
     }
 
     /// 120 particles of the ci preset, loose, after the run's setup.
@@ -1423,7 +1469,7 @@ mod tests {
     fn a_blown_up_particle_stops_every_brick_at_the_same_step() {
         let global = loose_ci_120();
         let bricks = split_for(2, global.box_.lx, global.box_.lz);
-        let mut b = [0, 1].map(|r| Brick::of(&global, bricks, r));
+        let mut b = [0, 1].map(|r| Brick::of(&global, &bricks, r));
         // a particle of brick 0 that brick 1 does not hold as a ghost
         let l = (0..b[0].sim.ids.len())
             .find(|&l| !b[0].sim.ghost[l] && !b[1].sim.ids.contains(&b[0].sim.ids[l]))
@@ -1467,12 +1513,7 @@ mod tests {
     fn a_particle_beyond_the_neighbouring_bricks_stops_every_brick() {
         let global = loose_ci_120();
         let (lx, lz) = (global.box_.lx, global.box_.lz);
-        let bricks = Bricks {
-            nx: 4,
-            nz: 1,
-            lx,
-            lz,
-        };
+        let bricks = Bricks::equal(4, 1, lx, lz);
         let cut = global.ghost_cut();
         assert_eq!(
             bricks.near(0, cut),
@@ -1480,7 +1521,12 @@ mod tests {
             "cut {cut} for bricks {} wide",
             lx / 4.0
         );
-        let mut b = [0, 1, 2, 3].map(|r| Brick::of(&global, bricks, r));
+        let mut b = [0, 1, 2, 3].map(|r| Brick::of(&global, &bricks, r));
+        for b in &mut b {
+            // no time counted: the bricks stay equal (one step's times would move them at
+            // random, and the particle with them)
+            b.cost_factor = 0.0;
+        }
         let l = (0..b[0].sim.ids.len())
             .find(|&l| !b[0].sim.ghost[l])
             .expect("an own particle");
@@ -1547,7 +1593,7 @@ mod tests {
                 assert_eq!(census.pairs, [s.listed_pairs()]);
             }
             for b in 0..r {
-                let brick = Brick::of(&s, *bricks, b);
+                let brick = Brick::of(&s, bricks, b);
                 let own = brick.sim.ghost.iter().filter(|g| !**g).count();
                 assert_eq!(census.own[b], own, "{r} bricks, brick {b}");
                 assert_eq!(census.ghosts[b], brick.sim.particle_count() - own);
@@ -1591,15 +1637,18 @@ mod tests {
             assert!(one.nl.builds >= 5, "{model}: {} rebuilds", one.nl.builds);
             assert!(one.wall.iter().any(|w| !w.rec.is_empty()));
             let reference = state_bytes(&one);
-            for (split, threads) in [
-                ((1, 1), 2),
-                ((2, 1), 1),
-                ((2, 1), 2),
-                ((3, 1), 1),
-                ((3, 1), 2),
-                ((2, 2), 1),
+            // (brick 0's time counting 3 times: the cuts move towards it)
+            for (split, threads, slow) in [
+                ((1, 1), 2, 1.0),
+                ((2, 1), 1, 1.0),
+                ((2, 1), 2, 1.0),
+                ((3, 1), 1, 1.0),
+                ((3, 1), 2, 3.0),
+                ((2, 2), 1, 1.0),
+                ((2, 2), 1, 3.0),
             ] {
-                let (got, moved) = in_bricks(&fresh, split, threads, Some(speed), steps);
+                let (got, moved, bricks) =
+                    in_bricks(&fresh, split, threads, slow, Some(speed), steps);
                 assert!(
                     state_bytes(&got) == reference,
                     "{model}: {split:?} bricks on {threads} threads differ from one process"
@@ -1609,7 +1658,15 @@ mod tests {
                 if split != (1, 1) {
                     assert!(moved > 0, "{model}: {split:?}: no particle changed brick");
                 }
-                eprintln!("{model}: {split:?} bricks x {threads} threads: one process's bits ({moved} particles changed brick)");
+                if slow > 1.0 {
+                    let equal = Bricks::equal(split.0, split.1, bricks.lx, bricks.lz);
+                    assert!(
+                        bricks.area_share(0) < 0.8 * equal.area_share(0),
+                        "{model}: {split:?}: brick 0 counting 3 times kept {:?}",
+                        bricks
+                    );
+                }
+                eprintln!("{model}: {split:?} bricks x {threads} threads, brick 0 x {slow}: one process's bits ({moved} particles changed brick)");
             }
         }
     }
@@ -1629,10 +1686,10 @@ mod tests {
             }
             s
         });
-        let (half, _) = in_bricks(&fresh, (2, 1), 1, Some(speed), 500);
+        let (half, _, _) = in_bricks(&fresh, (2, 1), 1, 1.0, Some(speed), 500);
         let bytes = rmp_serde::to_vec(&half).unwrap();
         let resumed: ShearSim = rmp_serde::from_slice(&bytes).unwrap();
-        let (end, _) = in_bricks(&resumed, (3, 1), 1, None, 700);
+        let (end, _, _) = in_bricks(&resumed, (3, 1), 1, 1.0, None, 700);
         assert!(state_bytes(&end) == state_bytes(&one));
     }
 }

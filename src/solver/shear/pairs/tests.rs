@@ -292,12 +292,7 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
             .map(|(p, h)| (gkey(p), (*p, *h)))
             .collect();
         for (nx, nz) in [(2usize, 1usize), (3, 1), (1, 2), (2, 2)] {
-            let bricks = super::super::bricks::Bricks {
-                nx,
-                nz,
-                lx: base.box_.lx,
-                lz: base.box_.lz,
-            };
+            let bricks = super::super::bricks::Bricks::equal(nx, nz, base.box_.lx, base.box_.lz);
             let mut owned_total = 0;
             let mut crossing = 0;
             for b in 0..bricks.count() {
@@ -369,12 +364,7 @@ fn plate_forces_summed_exactly_over_bricks_are_one_process_bits() {
     let with_candidates = |q: usize| s.wall_start[q] != s.wall_start[q + 1];
     let mut f64_differs = 0;
     for (nx, nz) in [(1usize, 1usize), (2, 1), (3, 1), (2, 2), (4, 3)] {
-        let bricks = Bricks {
-            nx,
-            nz,
-            lx: s.box_.lx,
-            lz: s.box_.lz,
-        };
+        let bricks = Bricks::equal(nx, nz, s.box_.lx, s.box_.lz);
         let shares: Vec<Vec<(V3, V3)>> = (0..bricks.count())
             .map(|b| {
                 (0..s.x.len())
