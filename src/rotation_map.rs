@@ -7,7 +7,7 @@
 
 use crate::error::{draw_err, Result};
 use crate::fsutil::write_atomic;
-use crate::solver::shear::Snapshot;
+use crate::solver::shear::observe::Snapshot;
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -11,7 +11,7 @@
 
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
-use crate::solver::shear::Snapshot;
+use crate::solver::shear::observe::Snapshot;
 use std::fmt::Write;
 use std::path::Path;
 

@@ -6,8 +6,9 @@
 //! scalar bits by construction (each operation one IEEE operation per lane, branches on
 //! values as per-lane selects, see `super::lanes`).
 
+use super::data::{pair_geometry, ContactData, ContactHistory};
 use super::lanes::{select3, Lanes, Mask};
-use super::{pair_geometry, surfaces_intersect, tangential, ContactData, ContactHistory};
+use super::{surfaces_intersect, tangential};
 use crate::solver::material::PairParams;
 
 /// Inputs of a lane's pair: both particles' state, the image shift of j and the history.

@@ -6,7 +6,7 @@
 use super::test_support::{params, DENSITY};
 use super::*;
 use crate::solver::material::sphere_mass;
-use crate::solver::vec3::{cross, dot};
+use crate::solver::vec3::{cross, dot, V3};
 use proptest::prelude::*;
 
 fn norm(v: V3) -> f64 {

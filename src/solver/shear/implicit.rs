@@ -1,43 +1,10 @@
 //! epsd_implicit (native only): the rolling dashpot integrated implicitly per particle. The
 //! force loop collects, per particle, `A = sum C P` and `B = sum C P w_j` of its dashpots
 //! ([`add_dashpot`]); after the explicit half-kick the angular velocity solves the 3x3 system
-//! of the trapezoidal rule ([`ShearSim::implicit_rotation`]).
+//! of the trapezoidal rule ([`solve_sym3`], in `ShearSim::implicit_rotation`). Pure kernels:
+//! the time loop imports them, they import nothing of it.
 
-use super::ShearSim;
 use crate::solver::vec3::V3;
-use rayon::prelude::*;
-
-impl ShearSim {
-    /// epsd_implicit, after the explicit half-kick of the non-dashpot torques: solves the
-    /// dashpot implicitly, `(I/h + A) w = (I/h) w* + B` with `w*` the kicked angular velocity
-    /// and `h = dt/2`; neighbours' angular velocities enter at their values during the force
-    /// computation (Jacobi), so the result does not depend on thread count. The dashpot
-    /// torque `B - A w` is added to the stored torque for the next initial half-kick: the
-    /// damping is integrated by the trapezoidal rule, A-stable for any `C_r dt / I`.
-    pub(super) fn implicit_rotation(&mut self) {
-        let h = self.nve.dtf;
-        let (radius, mass) = (&self.radius, &self.mass);
-        self.omega
-            .par_iter_mut()
-            .zip(self.torque.par_iter_mut())
-            .zip(self.imp.par_iter())
-            .enumerate()
-            .for_each(|(i, ((w, t), (a, b)))| {
-                if a.iter().all(|x| *x == 0.0) {
-                    return;
-                }
-                let ih = 0.4 * mass[i] * radius[i] * radius[i] / h;
-                let m = [a[0] + ih, a[1] + ih, a[2] + ih, a[3], a[4], a[5]];
-                let rhs = [ih * w[0] + b[0], ih * w[1] + b[1], ih * w[2] + b[2]];
-                let x = solve_sym3(m, rhs);
-                let ax = sym_mul(*a, x);
-                for k in 0..3 {
-                    t[k] += b[k] - ax[k];
-                }
-                *w = x;
-            });
-    }
-}
 
 /// Adds one implicit rolling dashpot `C P` (and `C P w_other`) to a particle's system.
 pub(super) fn add_dashpot(imp: &mut ([f64; 6], V3), c: f64, n: V3, torsion: bool, w_other: V3) {

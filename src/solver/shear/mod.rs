@@ -18,106 +18,36 @@ mod implicit;
 #[cfg(feature = "mpi")]
 pub mod mpi;
 pub mod neighbor;
-mod observe;
+pub mod observe;
 pub mod pairs;
 pub mod plate;
 mod rebuild;
+mod records;
 pub mod replay;
 pub mod servo;
 mod setup;
 pub mod state;
 mod walls;
 
-pub use observe::{PlateRecord, Snapshot};
 pub use pairs::KernelPath;
 pub use setup::ShearSetup;
 pub use state::Packing;
 
-use super::contact::{moved_beyond_half_skin, pair_geometry, ContactData, ForceData};
+use super::contact::{moved_beyond_half_skin, ForceData};
 use super::integrate::{Kick, NveSphere};
 use super::material::{sphere_mass, PairParams};
 use super::team::{bounds, split_mut, Team};
-use super::trimesh::{TriContactRecord, TriMesh};
+use super::trimesh::TriMesh;
 use super::vec3::V3;
 use crate::error::{Error, Result};
-use implicit::add_dashpot;
+use implicit::{add_dashpot, solve_sym3, sym_mul};
 use neighbor::{NeighborList, Periodic};
 use plate::{plate_triangles, Plate, Side};
+use records::{
+    image_shift, pair_contact, PairContact, PairDamp, PairState, WallSlots, MAX_WALL_CONTACTS,
+};
 use servo::Servo;
 use std::sync::{Arc, Mutex};
-
-/// Most mesh contact records one sphere may hold at once.
-const MAX_WALL_CONTACTS: usize = 8;
-
-/// Mesh contact records of one particle (fix_contact_history_mesh's partner list), in the
-/// order they were created, at most [`MAX_WALL_CONTACTS`]. Held on the heap only while the
-/// particle has records: most particles are away from the plates, and a fixed array of 8
-/// records was 840 bytes per particle, the largest item of the solver's memory. Stored in
-/// checkpoints as that fixed array ([`FixedSlots`]), so checkpoints of either layout resume.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
-#[serde(from = "FixedSlots", into = "FixedSlots")]
-struct WallSlots {
-    rec: Vec<TriContactRecord>,
-}
-
-/// The checkpoint form of [`WallSlots`]: a count and 8 records.
-#[derive(Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
-struct FixedSlots {
-    n: u8,
-    rec: [TriContactRecord; MAX_WALL_CONTACTS],
-}
-
-impl From<FixedSlots> for WallSlots {
-    fn from(f: FixedSlots) -> Self {
-        let n = (f.n as usize).min(MAX_WALL_CONTACTS);
-        WallSlots {
-            rec: f.rec[..n].to_vec(),
-        }
-    }
-}
-
-impl From<WallSlots> for FixedSlots {
-    fn from(w: WallSlots) -> Self {
-        let mut f = FixedSlots {
-            n: w.rec.len() as u8,
-            ..Default::default()
-        };
-        f.rec[..w.rec.len()].copy_from_slice(&w.rec);
-        f
-    }
-}
-
-/// The 9 periodic image shifts (x, z) of a triangle; index 4 is the triangle itself.
-fn image_shift(k: u8, lx: f64, lz: f64) -> V3 {
-    let (ix, iz) = ((k / 3) as f64 - 1.0, (k % 3) as f64 - 1.0);
-    [ix * lx, 0.0, iz * lz]
-}
-
-/// The state of a listed pair after the force loop.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-enum PairContact {
-    #[default]
-    Apart,
-    Touching,
-    /// Touching, with the rolling resistance at full mobilisation.
-    RollingMobilised,
-}
-
-/// Per pair, from the force loop: the contact state (2 bytes; what observers count).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-struct PairState {
-    contact: PairContact,
-    /// The tangential force is at the Coulomb limit `mu_p |Fn|` (to 1e-9, a label only).
-    sliding: bool,
-}
-
-/// Per pair, from the force loop, for epsd_implicit only: the rolling dashpot's coefficient
-/// and the contact normal, which the implicit half-kick reads.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-struct PairDamp {
-    damping: f64,
-    en: V3,
-}
 
 /// The shear box state and time loop, built from its own constants ([`ShearSetup`], made
 /// from a case by `spec::shear::ShearCase::setup`). The time step is read from `setup.dt`
@@ -1071,24 +1001,37 @@ pub fn compact(case: &ShearSetup, loose: &Packing, steps: u64) -> Result<Packing
     Ok(sim.state(loose))
 }
 
-/// The contact data of a listed pair as pair_gran_base.h sets it up (j seen at its image
-/// `x_j + shift`, `delta = x_i - x_j`), or None if the pair does not touch
-/// (`rsq >= radsum^2`).
-pub(crate) fn pair_contact(
-    p: &neighbor::Pair,
-    x: (V3, V3),
-    radius: (f64, f64),
-    mass: (f64, f64),
-    v: (V3, V3),
-    omega: (V3, V3),
-) -> Option<ContactData> {
-    let (delta, rsq, touch) = pair_geometry(x.0, x.1, p.shift, radius.0, radius.1);
-    if !touch {
-        return None;
+impl ShearSim {
+    /// epsd_implicit, after the explicit half-kick of the non-dashpot torques: solves the
+    /// dashpot implicitly, `(I/h + A) w = (I/h) w* + B` with `w*` the kicked angular velocity
+    /// and `h = dt/2`; neighbours' angular velocities enter at their values during the force
+    /// computation (Jacobi), so the result does not depend on thread count. The dashpot
+    /// torque `B - A w` is added to the stored torque for the next initial half-kick: the
+    /// damping is integrated by the trapezoidal rule, A-stable for any `C_r dt / I`.
+    pub(super) fn implicit_rotation(&mut self) {
+        use rayon::prelude::*;
+        let h = self.nve.dtf;
+        let (radius, mass) = (&self.radius, &self.mass);
+        self.omega
+            .par_iter_mut()
+            .zip(self.torque.par_iter_mut())
+            .zip(self.imp.par_iter())
+            .enumerate()
+            .for_each(|(i, ((w, t), (a, b)))| {
+                if a.iter().all(|x| *x == 0.0) {
+                    return;
+                }
+                let ih = 0.4 * mass[i] * radius[i] * radius[i] / h;
+                let m = [a[0] + ih, a[1] + ih, a[2] + ih, a[3], a[4], a[5]];
+                let rhs = [ih * w[0] + b[0], ih * w[1] + b[1], ih * w[2] + b[2]];
+                let x = solve_sym3(m, rhs);
+                let ax = sym_mul(*a, x);
+                for k in 0..3 {
+                    t[k] += b[k] - ax[k];
+                }
+                *w = x;
+            });
     }
-    Some(ContactData::pair(
-        delta, rsq, radius.0, radius.1, mass.0, mass.1, v, omega,
-    ))
 }
 
 #[cfg(test)]
@@ -1097,38 +1040,6 @@ mod tests {
     use crate::packing::loose_packing;
     use crate::solver::contact::models::RollingModel;
     use crate::spec::shear::ShearCase;
-
-    /// A particle's plate records survive the checkpoint form (a count and 8 fixed slots)
-    /// unchanged, in order, and a record count beyond 8 is not read past the slots.
-    #[test]
-    fn wall_slots_round_trip_through_the_checkpoint_form() {
-        let rec = |tri: u32, s: f64| TriContactRecord {
-            mesh: (tri % 2) as u8,
-            tri,
-            keep: tri.is_multiple_of(3),
-            hist: crate::solver::contact::ContactHistory {
-                shear: [s, -0.0, 1e-300],
-                r_torque: [-s, 0.0, f64::MIN_POSITIVE],
-            },
-            force: [s; 3],
-            torque: [-s; 3],
-            face: tri.is_multiple_of(2),
-        };
-        let w = WallSlots {
-            rec: vec![rec(7, 1.5), rec(3, -2.25), rec(12, 3.0)],
-        };
-        let bytes = rmp_serde::to_vec(&w).unwrap();
-        let back: WallSlots = rmp_serde::from_slice(&bytes).unwrap();
-        assert_eq!(back.rec, w.rec);
-        let bits = |w: &WallSlots| rmp_serde::to_vec(w).unwrap();
-        assert_eq!(bits(&back), bytes);
-        let fixed = FixedSlots {
-            n: 200,
-            ..FixedSlots::from(w)
-        };
-        assert_eq!(WallSlots::from(fixed).rec.len(), MAX_WALL_CONTACTS);
-        assert!(WallSlots::from(FixedSlots::default()).rec.is_empty());
-    }
 
     /// Every piece of state a step carries to the next (particles, forces, rotations, pair
     /// list with histories, wall contact slots, plates, servo, rebuild state) as bytes,

@@ -7,7 +7,7 @@
 //! `RUST_LOG=trace` prints every particle-triangle contact.
 
 use super::implicit::add_dashpot;
-use super::{image_shift, WallSlots, MAX_WALL_CONTACTS};
+use super::records::{image_shift, WallSlots, MAX_WALL_CONTACTS};
 use crate::solver::contact::{surfaces_intersect, ContactData};
 use crate::solver::material::PairParams;
 use crate::solver::trimesh::{TriContactRecord, TriMesh};

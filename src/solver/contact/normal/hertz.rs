@@ -1,7 +1,7 @@
 //! `model hertz` (normal_model_hertz.h, `NormalModel<HERTZ>::surfacesIntersect`).
 
+use super::super::data::{ContactData, ForceData};
 use super::super::lanes::Lanes;
-use super::super::{ContactData, ForceData};
 use crate::solver::material::PairParams;
 
 /// sqrt(5/6) as the literal in normal_model_hertz.h.

@@ -1,8 +1,8 @@
 //! `rolling_friction cdt` (rolling_model_cdt.h): constant directional torque.
 
+use super::super::data::ContactData;
 use super::super::lanes::{select3, Lanes, Mask};
 use super::super::normal::NormalForce;
-use super::super::ContactData;
 use super::relative_rotation;
 use crate::solver::material::PairParams;
 use crate::solver::vec3::dot;

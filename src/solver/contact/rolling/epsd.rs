@@ -1,8 +1,8 @@
 //! `rolling_friction epsd` (rolling_model_epsd.h): elastic-plastic spring-dashpot.
 
+use super::super::data::ContactData;
 use super::super::lanes::Lanes;
 use super::super::normal::NormalForce;
-use super::super::ContactData;
 use super::spring_dashpot;
 use crate::solver::material::PairParams;
 

@@ -1,8 +1,8 @@
 //! `rolling_friction epsd2` (rolling_model_epsd2.h): elastic-plastic spring, no dashpot.
 
+use super::super::data::ContactData;
 use super::super::lanes::Lanes;
 use super::super::normal::NormalForce;
-use super::super::ContactData;
 use super::spring;
 use crate::solver::material::PairParams;
 

@@ -2,9 +2,9 @@
 //! epsd's spring, its dashpot left to the integrator (`solver::shear::implicit`), which
 //! applies it implicitly so that it is stable at any eta_r.
 
+use super::super::data::ContactData;
 use super::super::lanes::{Lanes, Mask};
 use super::super::normal::NormalForce;
-use super::super::ContactData;
 use super::{dashpot_coefficient, epsd, spring};
 use crate::solver::material::PairParams;
 

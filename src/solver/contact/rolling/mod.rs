@@ -11,13 +11,13 @@ pub mod epsd2;
 pub mod epsd3;
 pub mod epsd_implicit;
 
+use super::data::{ContactData, ForceData};
 use super::lanes::{select3, Lanes, Mask};
 use super::normal::NormalForce;
-use super::{ContactData, ForceData};
 use crate::solver::material::PairParams;
 use crate::solver::vec3::dot;
 
-pub use super::pair_reff;
+pub use super::data::pair_reff;
 
 /// Adds the rolling torque as every rolling header does: `i -= r_torque`, `j += r_torque`
 /// (the j part is discarded for walls).

@@ -1,8 +1,8 @@
 //! Surface model `default` (surface_model_default.h, `SurfaceModel<SURFACE_DEFAULT>::
 //! surfacesIntersect`): relative velocities at the contact.
 
+use super::super::data::ContactData;
 use super::super::lanes::Lanes;
-use super::super::ContactData;
 
 /// Mirrors surface_model_default.h for spheres:
 /// - `vr = v_i - v_j`, `vn = vr . en`, `vt = vr - vn en`;

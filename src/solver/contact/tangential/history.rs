@@ -1,9 +1,9 @@
 //! `tangential history` (tangential_model_history.h,
 //! `TangentialModel<TANGENTIAL_HISTORY>::surfacesIntersect`).
 
+use super::super::data::{ContactData, ForceData};
 use super::super::lanes::{select3, Lanes, Mask};
 use super::super::normal::NormalForce;
-use super::super::{ContactData, ForceData};
 use crate::solver::material::PairParams;
 use crate::solver::vec3::dot;
 

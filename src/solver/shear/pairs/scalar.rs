@@ -2,8 +2,8 @@
 //! headers ([`surfaces_intersect`]), the path the SIMD passes are held equal to.
 
 use super::super::neighbor::Pair;
-use super::super::{pair_contact, PairContact, PairDamp, PairState};
-use super::Particles;
+use super::super::records::{pair_contact, PairContact, PairDamp, PairState};
+use super::data::Particles;
 use crate::solver::contact::{surfaces_intersect, tangential, ContactHistory, ForceData};
 use crate::solver::material::PairParams;
 

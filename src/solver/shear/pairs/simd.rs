@@ -5,8 +5,10 @@
 //! [`batch::pair`]: crate::solver::contact::batch::pair
 
 use super::super::neighbor::Pair;
-use super::super::{PairContact, PairDamp, PairState};
-use super::{KernelPath, Particles, Piece, Sink, CHUNK};
+use super::super::records::{PairContact, PairDamp, PairState};
+use super::data::{Particles, Piece};
+use super::path::KernelPath;
+use super::sums::{Sink, CHUNK};
 use crate::solver::contact::batch::{self, PairIn};
 use crate::solver::contact::lanes::{Lanes, F4, F8};
 use crate::solver::contact::{ContactHistory, ForceData};

@@ -2,7 +2,11 @@
 //! the thread count (blocks of pairs, their boundary particles' shares kept apart and added
 //! in order).
 
-use super::*;
+use super::super::neighbor::Pair;
+use super::super::records::{PairContact, PairDamp, PairState};
+use super::data::{add_force, take_front, Csr, Piece};
+use crate::solver::contact::{ContactHistory, ForceData};
+use crate::solver::vec3::V3;
 
 /// Where a piece's increments go.
 pub(super) enum Sink<'a> {

@@ -1,10 +1,12 @@
 //! The pair pass's paths against each other: every SIMD path gives the scalar bits.
 
 use super::super::neighbor::NeighborList;
+use super::super::records::PairContact;
 use super::super::ShearSim;
 use super::*;
 use crate::packing::loose_packing;
 use crate::solver::contact::models::RollingModel;
+use crate::solver::vec3::V3;
 use crate::spec::shear::{Preset, ShearCase};
 
 /// A dense sheared ci-preset state of `model` (mu_r 0.5, restitution `e`, eta_r `eta`
