@@ -1092,8 +1092,7 @@ pub trait Stepper {
     /// Every brick's own particles, by rank (collective for bricks): where the balance
     /// ([`Bricks::balanced`]) put the cuts.
     fn own_by_rank(&mut self) -> Vec<u64> {
-        let s = self.local();
-        vec![(s.x.len() - s.ghost.iter().filter(|g| **g).count()) as u64]
+        vec![self.local().own_particles() as u64]
     }
 }
 
@@ -1169,8 +1168,7 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
     }
 
     fn own_by_rank(&mut self) -> Vec<u64> {
-        let own = self.brick.sim.ghost.iter().filter(|g| !**g).count();
-        all_gather(self.transport, own as u64)
+        all_gather(self.transport, self.brick.sim.own_particles() as u64)
     }
 }
 
@@ -1310,6 +1308,11 @@ impl ShearSim {
     /// ([`super::neighbor::cutoff`]).
     fn ghost_cut(&self) -> f64 {
         super::neighbor::cutoff(&self.radius, self.skin)
+    }
+
+    /// The particles this state owns: all of one process's, a brick's own (not its ghosts).
+    fn own_particles(&self) -> usize {
+        self.x.len() - self.ghost.iter().filter(|g| **g).count()
     }
 
     /// Whether particle `q` has plate candidates (since the last rebuild).
@@ -1594,7 +1597,7 @@ mod tests {
             }
             for b in 0..r {
                 let brick = Brick::of(&s, bricks, b);
-                let own = brick.sim.ghost.iter().filter(|g| !**g).count();
+                let own = brick.sim.own_particles();
                 assert_eq!(census.own[b], own, "{r} bricks, brick {b}");
                 assert_eq!(census.ghosts[b], brick.sim.particle_count() - own);
                 assert_eq!(census.pairs[b], brick.sim.listed_pairs());
