@@ -3,8 +3,7 @@
 #![warn(clippy::undocumented_unsafe_blocks, clippy::missing_safety_doc)]
 
 use clap::CommandFactory;
-use dem_verify::cli::study::execute;
-use dem_verify::cli::Cli;
+use dem_verify::cli::{execute, Cli};
 use dem_verify::run::{summary_written, Verdict};
 use std::io::Write;
 use std::os::fd::FromRawFd;

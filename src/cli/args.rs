@@ -95,3 +95,17 @@ impl LiggghtsArgs {
         }
     }
 }
+
+/// `verify run`.
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// The study file (TOML: version, command, [options])
+    pub study: PathBuf,
+    /// Print the plan (runs, steps, estimated core-hours and disk) and stop
+    #[arg(long)]
+    pub dry_run: bool,
+    /// Options that override the study's fields, as on the command line (after the file, with
+    /// or without `--`)
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+    pub overrides: Vec<String>,
+}

@@ -1,9 +1,11 @@
-//! Command-line interface: argument parsing (clap), then each command as a function that
-//! returns an [`Outcome`]. `main` maps outcomes to exit codes: 0 agree, 1 disagree, 2 error.
+//! Command-line interface: the grammar (cli/command.rs, clap), then each command as a
+//! function that returns a [`Verdict`]; this file dispatches. `main` maps verdicts to exit
+//! codes: 0 agree, 1 disagree, 2 error, 3 inconclusive.
 
 pub mod args;
 pub mod bench;
 pub mod chung_ooi;
+pub mod command;
 pub mod console;
 pub mod contact;
 pub mod convergence;
@@ -13,113 +15,14 @@ pub mod shear;
 pub mod study;
 pub mod sweep;
 
+pub use command::{Cli, Command};
+
 use crate::error::{Error, Result};
+use crate::fsutil::write_atomic;
 use crate::run::contact::write_decks;
 use crate::run::Verdict;
-use clap::{Parser, Subcommand};
-use std::path::PathBuf;
-
-#[derive(Parser, Debug)]
-#[command(
-    name = "verify",
-    version,
-    about = "Native DEM solver cross-validated against LIGGGHTS 3.8.0",
-    after_help = "Examples:\n  \
-        verify contact --case rolling_plastic          # one case, every rolling model, live LIGGGHTS\n  \
-        verify contact                                 # every built-in case\n  \
-        verify contact --reference                     # against stored LIGGGHTS outputs, no LIGGGHTS needed\n  \
-        verify contact --spec my_case.toml --rolling epsd2\n  \
-        verify contact --list\n  \
-        verify decks                                   # regenerate liggghts_inputs/\n  \
-        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci  # shear box, both codes, 3 seeds\n  \
-        verify replay --mu-r 0.5 --preset ci             # the gouge contact by contact from LIGGGHTS' states\n  \
-        verify nightly --out runs/nightly/today          # everything, report.html\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive (a statistical verdict its seeds cannot decide)."
-)]
-pub struct Cli {
-    #[command(subcommand)]
-    pub command: Command,
-    /// Print one JSON document on stdout at the end (verdict, exit code, error, and the
-    /// summary file the command wrote, parsed); everything else goes to stderr.
-    #[arg(long, global = true)]
-    pub json: bool,
-}
-
-#[derive(Subcommand, Debug)]
-pub enum Command {
-    /// Two-particle (and particle-wall) contact histories: native vs LIGGGHTS, channel by channel.
-    #[command(after_help = "Examples:\n  \
-        verify contact --case rolling_plastic            # one case, every model it lists, live LIGGGHTS\n  \
-        verify contact --reference                       # every case against the stored LIGGGHTS outputs\n  \
-        verify contact --spec my_case.toml --rolling epsd2\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error.")]
-    Contact(contact::ContactArgs),
-    /// The paper's shear box in LIGGGHTS and natively: plate forces, mu(strain), steady mu.
-    #[command(after_help = "Examples:\n  \
-        verify shear --mu-r 0.5 --eta-r 0.5 --preset ci   # both codes, 3 seeds, minutes\n  \
-        verify shear --mu-r 0.5 --preset fast --native-only --seeds 6\n  \
-        verify shear --preset paper --mu-r 1 --eta-r 0.5 --native-only   # hours; rerun to resume\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive (the paired CI straddles the margin; the line before the verdict says how many seeds would decide).")]
-    Shear(shear::ShearArgs),
-    /// Time-step convergence: the same case from the same compacted state at smaller dt.
-    #[command(after_help = "Examples:\n  \
-        verify convergence --mu-r 1 --eta-r 0.5 --preset ci --dt-factors 1,0.5,0.25\n  \
-        verify convergence --mu-r 1 --eta-r 0.5 --engine both --liggghts-dt-factors 1,0.5 --with-implicit\n\n\
-        Exit status: 0 converged, 1 not converged, 2 error.")]
-    // the shear flags that choose the codes are --engine here (given, they are refused)
-    #[command(mut_arg("native_only", |a| a.hide(true)), mut_arg("liggghts_only", |a| a.hide(true)))]
-    Convergence(convergence::ConvergenceArgs),
-    /// Every contact case and the nightly shear cases in both codes: report.html, summary.json,
-    /// history.
-    #[command(after_help = "Examples:\n  \
-        verify nightly --quick --out runs/nightly/quick   # minutes: ci preset, one seed\n  \
-        tools/nightly.sh                                  # the full night into runs/nightly/<date>\n  \
-        verify nightly --rerender --out reference/nightly/20261202-e1  # a stored night judged and drawn again\n\n\
-        Exit status: 0 agree, 1 disagree, 2 error, 3 inconclusive.")]
-    Nightly(nightly::NightlyArgs),
-    /// The paper's parametric study: plan, run (resumable, N at a time), SLURM array, collect,
-    /// report with the paper's figures and conclusions.
-    #[command(after_help = "Examples:\n  \
-        verify sweep --preset ci --mu-r 0,1 --eta-r 0,0.5 --seeds 2 --jobs 2 --out runs/sweep-ci\n  \
-        verify sweep --emit slurm --out /scratch/sweep && sbatch /scratch/sweep/sweep.sbatch\n  \
-        verify sweep report runs/sweep-ci --converged runs/conv-1-0.5")]
-    Sweep(sweep::SweepArgs),
-    /// The sheared gouge contact by contact: native restarted from LIGGGHTS' recorded states
-    /// (histories included) and compared with LIGGGHTS' next steps.
-    Replay(replay::ReplayArgs),
-    /// Throughput of both codes on the same dense shear state (particle-steps per second).
-    #[command(after_help = "Examples:\n  \
-        verify bench --preset fast --steps 10000 --threads 1,2 --kernels scalar,avx2,avx512\n  \
-        verify bench --preset fast --particles 250000 --native-only")]
-    Bench(bench::BenchArgs),
-    /// The Chung & Ooi (2011) DEM benchmark (tests 1-4, unequal radii) in both codes: each
-    /// code against the benchmark's analytic values, and the codes against each other.
-    #[command(after_help = "Examples:\n  \
-        verify chung-ooi                          # every case, live LIGGGHTS, about 20 s\n  \
-        verify chung-ooi --case chung_ooi_4       # the oblique impacts only\n\n\
-        Exit status: 0 every figure within its tolerance and the codes agree, 1 otherwise, 2 error.")]
-    ChungOoi(chung_ooi::ChungOoiArgs),
-    /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
-    Decks {
-        #[arg(long, default_value = "liggghts_inputs")]
-        out: PathBuf,
-    },
-    /// Print a shell completion script, e.g. `verify completions bash > ~/.local/share/bash-completion/completions/verify`.
-    Completions {
-        #[arg(value_enum)]
-        shell: clap_complete::Shell,
-    },
-    /// Print the manual page (roff), e.g. `verify man > verify.1 && man ./verify.1`.
-    Man,
-    /// Runs a study file (a command's options as TOML; see studies/): prints its plan
-    /// (runs, steps, core-hours, disk), then runs it; flags after the file override its fields.
-    #[command(after_help = "Examples:\n  \
-        verify run studies/fast-map.toml --dry-run      # the plan only\n  \
-        verify run runs/shear-x/study.toml              # repeat a run (finished parts reused)\n  \
-        verify run studies/paper.toml --jobs 2          # a field overridden\n\n\
-        Exit status: the command's (0 agree, 1 disagree, 2 error, 3 inconclusive).")]
-    Run(study::RunArgs),
-}
+use crate::solver::shear::pairs::KernelPath;
+use clap::{ArgMatches, FromArgMatches};
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<Verdict> {
@@ -132,7 +35,7 @@ pub fn run(cli: Cli) -> Result<Verdict> {
         Command::Nightly(a) => nightly::nightly(a),
         Command::Sweep(a) => sweep::sweep(a),
         Command::Convergence(a) => convergence::convergence(a),
-        Command::Run(a) => study::run_study(a),
+        Command::Run(a) => study::run_study(a, execute),
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());
@@ -156,4 +59,21 @@ pub fn run(cli: Cli) -> Result<Verdict> {
             Ok(Verdict::Done)
         }
     }
+}
+
+/// Runs parsed command-line matches; a command that wrote a summary also gets its resolved
+/// study, `study.toml`, beside it.
+pub fn execute(matches: &ArgMatches) -> Result<Verdict> {
+    let cli = Cli::from_arg_matches(matches)
+        .map_err(|e| Error::invalid("command line", "", e.to_string()))?;
+    // a bad DEM_VERIFY_MAX_KERNEL is refused here, before any solver reads it
+    KernelPath::max_from_env()?;
+    let study = study::resolve(matches);
+    let verdict = run(cli);
+    if let (Some(study), Some(summary)) = (study, crate::run::summary_written()) {
+        if let Some(dir) = summary.parent() {
+            write_atomic(&dir.join("study.toml"), study.as_bytes())?;
+        }
+    }
+    verdict
 }

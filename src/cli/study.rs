@@ -19,14 +19,14 @@
 //! finished parts are reused). Before it starts, a study prints its plan (runs, steps,
 //! estimated core-hours and disk); `--dry-run` prints only that.
 
-use super::{Cli, Command};
+use super::args::RunArgs;
+use super::command::{Cli, Command};
 use crate::error::{Error, Result};
-use crate::fsutil::write_atomic;
 use crate::run::convergence::StudyCode;
 use crate::run::{Engine, Verdict};
 use crate::solver::shear::pairs::KernelPath;
 use crate::spec::shear::ShearCase;
-use clap::{ArgAction, ArgMatches, Args, CommandFactory, FromArgMatches};
+use clap::{ArgAction, ArgMatches, CommandFactory, FromArgMatches};
 use std::path::{Path, PathBuf};
 
 /// Version of the study format.
@@ -41,20 +41,6 @@ const STUDY_COMMANDS: [&str; 6] = [
     "bench",
     "contact",
 ];
-
-/// `verify run`.
-#[derive(Args, Debug)]
-pub struct RunArgs {
-    /// The study file (TOML: version, command, [options])
-    pub study: PathBuf,
-    /// Print the plan (runs, steps, estimated core-hours and disk) and stop
-    #[arg(long)]
-    pub dry_run: bool,
-    /// Options that override the study's fields, as on the command line (after the file, with
-    /// or without `--`)
-    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
-    pub overrides: Vec<String>,
-}
 
 /// The resolved options of a parsed study-able command (defaults included), as a study file;
 /// None for other commands (and for `sweep` with a subcommand).
@@ -383,7 +369,10 @@ fn plan(cli: &Cli) -> Result<Option<(Plan, String)>> {
 }
 
 /// `verify run STUDY.toml`: prints the plan, then (unless --dry-run) runs the command.
-pub fn run_study(mut a: RunArgs) -> Result<Verdict> {
+///
+/// A study runs any command: `execute` is the dispatcher (cli/mod.rs's [`execute`](super::execute)),
+/// given rather than imported, so that this file and the dispatcher do not import each other.
+pub fn run_study(mut a: RunArgs, execute: fn(&ArgMatches) -> Result<Verdict>) -> Result<Verdict> {
     // after the file everything is an override, but for a `--` separator and --dry-run
     a.dry_run |= a.overrides.iter().any(|o| o == "--dry-run");
     a.overrides.retain(|o| o != "--dry-run" && o != "--");
@@ -412,21 +401,4 @@ pub fn run_study(mut a: RunArgs) -> Result<Verdict> {
         return Ok(Verdict::Done);
     }
     execute(&matches)
-}
-
-/// Runs parsed command-line matches; a command that wrote a summary also gets its resolved
-/// study, `study.toml`, beside it.
-pub fn execute(matches: &ArgMatches) -> Result<Verdict> {
-    let cli = Cli::from_arg_matches(matches)
-        .map_err(|e| Error::invalid("command line", "", e.to_string()))?;
-    // a bad DEM_VERIFY_MAX_KERNEL is refused here, before any solver reads it
-    KernelPath::max_from_env()?;
-    let study = resolve(matches);
-    let verdict = super::run(cli);
-    if let (Some(study), Some(summary)) = (study, crate::run::summary_written()) {
-        if let Some(dir) = summary.parent() {
-            write_atomic(&dir.join("study.toml"), study.as_bytes())?;
-        }
-    }
-    verdict
 }
