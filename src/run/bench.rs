@@ -466,8 +466,8 @@ fn rows_over_ranks(
     Ok((rows, child.link))
 }
 
-/// Measures, prints, writes `bench.json`; the report.
-pub fn run(a: &BenchRequest) -> Result<BenchReport> {
+/// The bench's request checked field by field before anything is made.
+fn check(a: &BenchRequest) -> Result<()> {
     if a.steps == 0 {
         return Err(Error::invalid("--steps", 0, ">= 1"));
     }
@@ -508,249 +508,315 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     for k in &a.kernels {
         k.checked("--kernels")?;
     }
-    let world = world_ranks(a)?;
-    let base = ShearCase::preset(a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
-    base.validate(false)?;
-    let k = ((a.particles as f64 / base.particles as f64).sqrt().round() as usize).max(1);
-    let out = a.out.clone();
-    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
-    let rss0 = peak_rss();
-    say!(
-        "verify bench: compacting the {} sample ({} particles, {} steps)...",
-        a.preset,
-        base.particles,
-        a.compression_steps
-    );
-    let loose = loose_packing(&base);
-    let dense = compact(&base.setup(), &loose, a.compression_steps)?;
-    let (case, state) = tile(&base, &dense, k);
-    let n = state.radius.len();
-    say!(
-        "  state: {n} particles ({k} x {k} tiles), {} timed steps per code, warm-up {} steps",
-        a.steps,
-        a.steps / 4
-    );
-    // A run of both codes: 1 servo step, warm-up run, timed run.
-    let warm = (a.steps / 4).max(1);
-    let mut c = case.clone();
-    c.compression_steps = 1;
-    let speed = base.stages[0].speed;
-    let h = c.estimated_height();
-    c.stages = vec![
-        Stage {
+    Ok(())
+}
+
+/// What every code of every round runs: the dense state (the preset's sample compacted, tiled
+/// `k x k`) and its case, cut to 1 servo step, a warm-up stage (a quarter of the timed steps)
+/// and the timed stage.
+struct Bench {
+    case: ShearCase,
+    state: Packing,
+    /// Particles of the state.
+    n: usize,
+    /// Steps of the warm-up and of the timed stage.
+    steps: Vec<u64>,
+    speed: f64,
+}
+
+impl Bench {
+    fn new(a: &BenchRequest) -> Result<Bench> {
+        let base = ShearCase::preset(a.preset, RollingModel::Epsd, 0.5, 0.5, 1)?;
+        base.validate(false)?;
+        let k = ((a.particles as f64 / base.particles as f64).sqrt().round() as usize).max(1);
+        say!(
+            "verify bench: compacting the {} sample ({} particles, {} steps)...",
+            a.preset,
+            base.particles,
+            a.compression_steps
+        );
+        let loose = loose_packing(&base);
+        let dense = compact(&base.setup(), &loose, a.compression_steps)?;
+        let (case, state) = tile(&base, &dense, k);
+        let n = state.radius.len();
+        say!(
+            "  state: {n} particles ({k} x {k} tiles), {} timed steps per code, warm-up {} steps",
+            a.steps,
+            a.steps / 4
+        );
+        let warm = (a.steps / 4).max(1);
+        let mut c = case;
+        c.compression_steps = 1;
+        let speed = base.stages[0].speed;
+        let h = c.estimated_height();
+        c.stages = vec![
+            Stage {
+                speed,
+                strain: warm as f64 * speed * c.dt / h,
+            },
+            Stage {
+                speed,
+                strain: a.steps as f64 * speed * c.dt / h,
+            },
+        ];
+        let steps = c.stage_steps();
+        c.output_every = c.total_steps();
+        c.snapshot_every = 0;
+        Ok(Bench {
+            case: c,
+            state,
+            n,
+            steps,
             speed,
-            strain: warm as f64 * speed * c.dt / h,
-        },
-        Stage {
-            speed,
-            strain: a.steps as f64 * speed * c.dt / h,
-        },
-    ];
-    let steps = c.stage_steps();
-    c.output_every = c.total_steps();
-    c.snapshot_every = 0;
-    let mut link = if world > 1 {
-        let l = probe_ranks_link();
-        if let Some(l) = &l {
-            say!(
-                "  link between the {world} ranks: {:.2} us per message, {:.2} GB/s",
-                l.latency_s * 1e6,
-                1e-9 / l.seconds_per_byte.max(1e-15)
-            );
-        }
-        l
-    } else {
-        None
-    };
+        })
+    }
+}
+
+/// What the first native runs leave beside their rows: the solver's memory (first run) and
+/// the scaling model's fit (first 1-rank, 1-thread run).
+#[derive(Default)]
+struct Firsts {
+    /// The memory figures are taken (by the first native run of this process).
+    measured: bool,
+    bytes_per_particle: Option<f64>,
+    held_per_particle: Vec<(String, f64)>,
+    fit: Option<super::scaling::Fit>,
+}
+
+/// One round's native runs in this process (or, under `mpirun`, this world of ranks): every
+/// kernel path at every thread count.
+fn native_rows(
+    a: &BenchRequest,
+    b: &Bench,
+    world: usize,
+    round: usize,
+    rss0: Option<f64>,
+    firsts: &mut Firsts,
+) -> Result<Vec<BenchRow>> {
+    let n = b.n;
     let mut rows = Vec::new();
-    let mut rss_native = None;
-    let mut held_native: Vec<(String, f64)> = Vec::new();
-    let mut scaling = None;
-    for round in 0..a.rounds {
-        if a.rounds > 1 {
-            say!("  round {} of {}", round + 1, a.rounds);
-        }
-        if world > 1 || a.ranks.contains(&1) {
-            for &kernel in &a.kernels {
-                for &t in &a.threads {
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(t)
-                        .build()
-                        .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
-                    // the solver's own peak: from the resident set just before it is made (the
-                    // input state and the compaction's leftovers excluded)
-                    let first = rss_native.is_none() && world == 1;
-                    let before = if first { reset_peak_rss() } else { None };
-                    let timing = Timing {
-                        warm: steps[0],
-                        timed: steps[1],
-                        speed,
-                        kernel,
-                    };
-                    let model_now = scaling.is_none() && world == 1 && t == 1;
-                    let (timed, (counts, held, cand, fit)) = pool.install(|| {
-                        bench_native(&c, &state, timing, |timed, s| {
-                            let l = s.local();
-                            // the 1-rank run's costs and its state's census for the scaling
-                            // model, taken here (the state is not kept)
-                            let fit = model_now
-                                .then(|| {
-                                    let p = timed.phases.as_ref()?;
-                                    let costs = super::scaling::Costs::of(
-                                        p,
-                                        l.listed_pairs(),
-                                        n,
-                                        timed.rebuilds,
-                                    )?;
-                                    Some(super::scaling::fit(l, costs, &MODEL_RANKS))
-                                })
-                                .flatten();
-                            (l.contact_counts(), l.memory(), l.plate_candidates(), fit)
+    for &kernel in &a.kernels {
+        for &t in &a.threads {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .map_err(|e| Error::invalid("--threads", t, e.to_string()))?;
+            // the solver's own peak: from the resident set just before it is made (the input
+            // state and the compaction's leftovers excluded)
+            let first = !firsts.measured && world == 1;
+            let before = if first { reset_peak_rss() } else { None };
+            let timing = Timing {
+                warm: b.steps[0],
+                timed: b.steps[1],
+                speed: b.speed,
+                kernel,
+            };
+            let model_now = firsts.fit.is_none() && world == 1 && t == 1;
+            let (timed, (counts, held, cand, fit)) = pool.install(|| {
+                bench_native(&b.case, &b.state, timing, |timed, s| {
+                    let l = s.local();
+                    // the 1-rank run's costs and its state's census for the scaling model,
+                    // taken here (the state is not kept)
+                    let fit = model_now
+                        .then(|| {
+                            let p = timed.phases.as_ref()?;
+                            let costs =
+                                super::scaling::Costs::of(p, l.listed_pairs(), n, timed.rebuilds)?;
+                            Some(super::scaling::fit(l, costs, &MODEL_RANKS))
                         })
-                    })?;
-                    let Timed {
-                        seconds: secs,
-                        cpu_seconds: cpu,
-                        phases,
-                        rank_phases,
-                        rank_particles,
-                        rebuilds,
-                        traffic,
-                    } = timed;
-                    if fit.is_some() {
-                        scaling = fit;
-                    }
-                    if first {
-                        held_native = held
-                            .iter()
-                            .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
-                            .collect();
-                        rss_native = match (before, peak_rss()) {
-                            (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
-                            _ => {
-                                say!(
-                                    "  (the peak resident set cannot be reset here: the memory \
-                                     figure counts the input state and the compaction too)"
-                                );
-                                rss0.zip(peak_rss()).map(|(a0, a1)| (a1 - a0) / n as f64)
-                            }
-                        };
-                    }
-                    let r = steps[1] as f64 * n as f64 / secs;
-                    let row = BenchRow {
-                        code: "native".into(),
-                        round,
-                        workers: t,
-                        ranks: world,
-                        particles: n,
-                        steps: steps[1],
-                        seconds: secs,
-                        cpu_seconds: cpu,
-                        particle_steps_per_s: r,
-                        per_core: r / (t * world) as f64,
-                        kernel: Some(kernel),
-                        phases,
-                        // a brick's counts are of its own particles and ghosts: one process's only
-                        per_particle: (world == 1).then(|| {
-                            (
-                                counts.0 as f64 / n as f64,
-                                counts.1 as f64 / n as f64,
-                                counts.2 as f64 / n as f64,
-                            )
-                        }),
-                        rebuilds: Some(rebuilds),
-                        traffic,
-                        rank_phases: if world > 1 {
-                            rank_phases.into_iter().flatten().collect()
-                        } else {
-                            Vec::new()
-                        },
-                        rank_particles: if world > 1 {
-                            rank_particles
-                        } else {
-                            Vec::new()
-                        },
-                    };
-                    print_row(&row);
-                    if world == 1 {
+                        .flatten();
+                    (l.contact_counts(), l.memory(), l.plate_candidates(), fit)
+                })
+            })?;
+            if fit.is_some() {
+                firsts.fit = fit;
+            }
+            if first {
+                firsts.measured = true;
+                firsts.held_per_particle = held
+                    .iter()
+                    .map(|&(item, b)| (item.to_string(), b as f64 / n as f64))
+                    .collect();
+                firsts.bytes_per_particle = match (before, peak_rss()) {
+                    (Some(a0), Some(a1)) => Some((a1 - a0) / n as f64),
+                    _ => {
                         say!(
-                            "           {:.1} % of the particles test {:.1} plate triangles each",
-                            100.0 * cand.0 as f64 / n as f64,
-                            cand.1 as f64 / cand.0.max(1) as f64
+                            "  (the peak resident set cannot be reset here: the memory figure \
+                             counts the input state and the compaction too)"
                         );
+                        rss0.zip(peak_rss()).map(|(a0, a1)| (a1 - a0) / n as f64)
                     }
-                    rows.push(row);
-                }
-            }
-        }
-        if world == 1 {
-            for &r in a.ranks.iter().filter(|&&r| r > 1) {
-                let dir = out.join(format!("ranks{r}_round{round}"));
-                say!(
-                    "  native over {r} MPI ranks: `mpirun -np {r} verify bench` (log {})",
-                    dir.join("bench.log").display()
-                );
-                let (got, l) = rows_over_ranks(a, r, &dir)?;
-                if link.is_none() {
-                    link = l;
-                }
-                for mut row in got {
-                    row.round = round;
-                    print_row(&row);
-                    rows.push(row);
-                }
-            }
-        }
-        if let Some(lr) = &a.liggghts {
-            for &p in &a.procs {
-                let mut lig = lr.locate()?;
-                if p > 1 {
-                    lig.mpi_procs = Some(p);
-                }
-                let dir = out.join(format!("liggghts_np{p}"));
-                std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-                lig.run(&crate::deck::shear::shear_deck(&c, &state), &dir)?;
-                let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
-                let rebuilds = last_neighbor_builds(&dir.join(LOG_NAME))?;
-                let r = st as f64 * n as f64 / secs;
-                let row = BenchRow {
-                    code: "liggghts".into(),
-                    round,
-                    workers: p,
-                    ranks: p,
-                    particles: n,
-                    steps: st,
-                    seconds: secs,
-                    cpu_seconds: None,
-                    particle_steps_per_s: r,
-                    per_core: r / p as f64,
-                    kernel: None,
-                    phases: None,
-                    per_particle: None,
-                    rebuilds,
-                    traffic: None,
-                    rank_phases: Vec::new(),
-                    rank_particles: Vec::new(),
                 };
-                print_row(&row);
-                rows.push(row);
             }
+            let row = native_row(timed, counts, round, t, world, b, kernel);
+            print_row(&row);
+            if world == 1 {
+                say!(
+                    "           {:.1} % of the particles test {:.1} plate triangles each",
+                    100.0 * cand.0 as f64 / n as f64,
+                    cand.1 as f64 / cand.0.max(1) as f64
+                );
+            }
+            rows.push(row);
         }
     }
-    // a configuration's rate: the median of its rounds
-    let rate = |code: &str, w: usize, ranks: usize, k: Option<KernelPath>| {
-        median(
-            rows.iter()
-                .filter(|r| r.code == code && r.workers == w && r.ranks == ranks && r.kernel == k)
-                .map(|r| r.particle_steps_per_s)
-                .collect(),
-        )
-    };
-    // the ratios use the fastest kernel path measured with one thread (median rates)
+    Ok(rows)
+}
+
+/// A native run's row.
+fn native_row(
+    timed: Timed,
+    counts: (usize, usize, usize),
+    round: usize,
+    threads: usize,
+    world: usize,
+    b: &Bench,
+    kernel: KernelPath,
+) -> BenchRow {
+    let (n, steps) = (b.n, b.steps[1]);
+    let Timed {
+        seconds,
+        cpu_seconds,
+        phases,
+        rank_phases,
+        rank_particles,
+        rebuilds,
+        traffic,
+    } = timed;
+    let r = steps as f64 * n as f64 / seconds;
+    BenchRow {
+        code: "native".into(),
+        round,
+        workers: threads,
+        ranks: world,
+        particles: n,
+        steps,
+        seconds,
+        cpu_seconds,
+        particle_steps_per_s: r,
+        per_core: r / (threads * world) as f64,
+        kernel: Some(kernel),
+        phases,
+        // a brick's counts are of its own particles and ghosts: one process's only
+        per_particle: (world == 1).then(|| {
+            (
+                counts.0 as f64 / n as f64,
+                counts.1 as f64 / n as f64,
+                counts.2 as f64 / n as f64,
+            )
+        }),
+        rebuilds: Some(rebuilds),
+        traffic,
+        rank_phases: if world > 1 {
+            rank_phases.into_iter().flatten().collect()
+        } else {
+            Vec::new()
+        },
+        rank_particles: if world > 1 {
+            rank_particles
+        } else {
+            Vec::new()
+        },
+    }
+}
+
+/// One round's native runs over more than one rank: `mpirun -np r verify bench` for each rank
+/// count above 1 (from a 1-rank bench).
+fn ranks_rows(a: &BenchRequest, round: usize, link: &mut Option<Link>) -> Result<Vec<BenchRow>> {
+    let mut rows = Vec::new();
+    for &r in a.ranks.iter().filter(|&&r| r > 1) {
+        let dir = a.out.join(format!("ranks{r}_round{round}"));
+        say!(
+            "  native over {r} MPI ranks: `mpirun -np {r} verify bench` (log {})",
+            dir.join("bench.log").display()
+        );
+        let (got, l) = rows_over_ranks(a, r, &dir)?;
+        if link.is_none() {
+            *link = l;
+        }
+        for mut row in got {
+            row.round = round;
+            print_row(&row);
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+/// One round's LIGGGHTS runs, one per process count, on the same state and steps.
+fn liggghts_rows(
+    a: &BenchRequest,
+    lr: &LiggghtsRequest,
+    b: &Bench,
+    round: usize,
+) -> Result<Vec<BenchRow>> {
+    let mut rows = Vec::new();
+    for &p in &a.procs {
+        let mut lig = lr.locate()?;
+        if p > 1 {
+            lig.mpi_procs = Some(p);
+        }
+        let dir = a.out.join(format!("liggghts_np{p}"));
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        lig.run(&crate::deck::shear::shear_deck(&b.case, &b.state), &dir)?;
+        let (secs, st) = last_loop_time(&dir.join(LOG_NAME))?;
+        let rebuilds = last_neighbor_builds(&dir.join(LOG_NAME))?;
+        let r = st as f64 * b.n as f64 / secs;
+        let row = BenchRow {
+            code: "liggghts".into(),
+            round,
+            workers: p,
+            ranks: p,
+            particles: b.n,
+            steps: st,
+            seconds: secs,
+            cpu_seconds: None,
+            particle_steps_per_s: r,
+            per_core: r / p as f64,
+            kernel: None,
+            phases: None,
+            per_particle: None,
+            rebuilds,
+            traffic: None,
+            rank_phases: Vec::new(),
+            rank_particles: Vec::new(),
+        };
+        print_row(&row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// A configuration's rate (code, threads or processes, ranks, kernel path): the median of
+/// its rounds.
+fn rate(
+    rows: &[BenchRow],
+    code: &str,
+    w: usize,
+    ranks: usize,
+    k: Option<KernelPath>,
+) -> Option<f64> {
+    median(
+        rows.iter()
+            .filter(|r| r.code == code && r.workers == w && r.ranks == ranks && r.kernel == k)
+            .map(|r| r.particle_steps_per_s)
+            .collect(),
+    )
+}
+
+/// The rows' ratios (per round and their medians, on the fastest kernel path measured with
+/// one thread), the estimated paper-run hours, the scaling model: the report.
+fn summarise(
+    a: &BenchRequest,
+    n: usize,
+    rows: Vec<BenchRow>,
+    firsts: Firsts,
+    link: Option<Link>,
+) -> Result<BenchReport> {
     let kernel = a
         .kernels
         .iter()
-        .filter_map(|&k| rate("native", 1, 1, Some(k)).map(|r| (k, r)))
+        .filter_map(|&k| rate(&rows, "native", 1, 1, Some(k)).map(|r| (k, r)))
         .max_by(|x, y| x.1.total_cmp(&y.1))
         .map(|(k, _)| k);
     let in_round = |code: &str, w: usize, ranks: usize, round: usize| {
@@ -776,16 +842,13 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
     let rounds_native_vs_liggghts_1 = per_round(("native", 1, 1), ("liggghts", 1, 1));
     let rounds_native_2_vs_1 = per_round(("native", 2, 1), ("native", 1, 1));
     let rounds_native_ranks_2_vs_1 = per_round(("native", 1, 2), ("native", 1, 1));
-    let native_vs_liggghts_1 = median(rounds_native_vs_liggghts_1.clone());
-    let native_2_vs_1 = median(rounds_native_2_vs_1.clone());
-    let native_ranks_2_vs_1 = median(rounds_native_ranks_2_vs_1.clone());
     let liggghts_2_vs_1 = median(per_round(("liggghts", 2, 2), ("liggghts", 1, 1)));
     // one paper run: 2500 particles, the paper preset's steps
-    let paper = ShearCase::preset(Preset::Paper, RollingModel::Epsd, 0.5, 0.5, 1)?;
+    let paper = paper_case()?;
     let paper_ps = paper.total_steps() as f64 * paper.particles as f64;
     let mut paper_run_hours = Vec::new();
     for r in rows.iter().filter(|r| r.round == 0) {
-        let Some(median_rate) = rate(&r.code, r.workers, r.ranks, r.kernel) else {
+        let Some(median_rate) = rate(&rows, &r.code, r.workers, r.ranks, r.kernel) else {
             continue;
         };
         let ranks = if r.code == "native" && r.ranks > 1 {
@@ -801,29 +864,37 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             paper_ps / median_rate / 3600.0,
         ));
     }
-    let scaling = scaling.map(|f| super::scaling::model(&f, link));
-    let measured_2_ranks = rate("native", 1, 2, kernel);
-    let report = BenchReport {
+    Ok(BenchReport {
         schema: super::SCHEMA,
         preset: a.preset,
         rolling: RollingModel::Epsd,
         particles: n,
-        rows,
-        native_vs_liggghts_1,
-        native_2_vs_1,
+        native_vs_liggghts_1: median(rounds_native_vs_liggghts_1.clone()),
+        native_2_vs_1: median(rounds_native_2_vs_1.clone()),
         rounds_native_vs_liggghts_1,
         rounds_native_2_vs_1,
-        native_ranks_2_vs_1,
+        native_ranks_2_vs_1: median(rounds_native_ranks_2_vs_1.clone()),
         rounds_native_ranks_2_vs_1,
         liggghts_2_vs_1,
         link,
-        scaling,
+        scaling: firsts.fit.map(|f| super::scaling::model(&f, link)),
         kernel,
-        native_bytes_per_particle: rss_native,
-        native_held_per_particle: held_native.clone(),
+        native_bytes_per_particle: firsts.bytes_per_particle,
+        native_held_per_particle: firsts.held_per_particle,
         paper_run_hours,
+        rows,
         date_utc: utc_stamp(),
-    };
+    })
+}
+
+/// One `paper` run (2500 particles; its compaction and three stages): what the bench's rates
+/// are turned into hours of.
+fn paper_case() -> Result<ShearCase> {
+    ShearCase::preset(Preset::Paper, RollingModel::Epsd, 0.5, 0.5, 1)
+}
+
+/// The report's ratios, memory, paper-run hours and scaling table, said line by line.
+fn say_summary(report: &BenchReport) -> Result<()> {
     let rounds = |v: &[f64]| match v.len() {
         0 | 1 => String::new(),
         _ => {
@@ -831,33 +902,34 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             format!(" (median of {} rounds: {})", v.len(), each.join(", "))
         }
     };
-    if let Some(x) = native_vs_liggghts_1 {
+    if let Some(x) = report.native_vs_liggghts_1 {
         say!(
             "  native 1 thread / LIGGGHTS 1 process = {x:.2}{}",
             rounds(&report.rounds_native_vs_liggghts_1)
         );
     }
-    if let Some(x) = native_2_vs_1 {
+    if let Some(x) = report.native_2_vs_1 {
         say!(
             "  native 2 threads / native 1 thread = {x:.2}{}",
             rounds(&report.rounds_native_2_vs_1)
         );
     }
-    if let Some(x) = native_ranks_2_vs_1 {
+    if let Some(x) = report.native_ranks_2_vs_1 {
         say!(
             "  native 2 ranks x 1 thread / native 1 thread = {x:.2}{}",
             rounds(&report.rounds_native_ranks_2_vs_1)
         );
     }
-    if let Some(x) = liggghts_2_vs_1 {
+    if let Some(x) = report.liggghts_2_vs_1 {
         say!("  LIGGGHTS 2 processes / LIGGGHTS 1 process = {x:.2}");
     }
-    if let Some(b) = rss_native {
+    if let Some(b) = report.native_bytes_per_particle {
         say!("  native memory: {b:.0} bytes per particle (peak RSS growth of the solver)");
     }
-    if !held_native.is_empty() {
-        let total: f64 = held_native.iter().map(|(_, b)| b).sum();
-        let parts: Vec<String> = held_native
+    let held = &report.native_held_per_particle;
+    if !held.is_empty() {
+        let total: f64 = held.iter().map(|(_, b)| b).sum();
+        let parts: Vec<String> = held
             .iter()
             .filter(|(_, b)| *b > 0.0)
             .map(|(item, b)| format!("{item} {b:.0}"))
@@ -867,10 +939,12 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             parts.join(", ")
         );
     }
+    let paper = paper_case()?;
     for (who, hrs) in &report.paper_run_hours {
         say!(
-            "  estimated full paper run ({} steps x 2500 particles): {who}: {hrs:.1} h",
-            paper.total_steps()
+            "  estimated full paper run ({} steps x {} particles): {who}: {hrs:.1} h",
+            paper.total_steps(),
+            paper.particles
         );
     }
     if let Some(sc) = &report.scaling {
@@ -878,11 +952,10 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             say!("{line}");
         }
         // the model against what ran here: 2 ranks x 1 thread
-        if let (Some(p2), Some(measured)) =
-            (sc.points.iter().find(|p| p.ranks == 2), measured_2_ranks)
-        {
+        let measured = rate(&report.rows, "native", 1, 2, report.kernel);
+        if let (Some(p2), Some(measured)) = (sc.points.iter().find(|p| p.ranks == 2), measured) {
             if let Some(pred) = p2.here_built_s {
-                let measured_s = n as f64 / measured;
+                let measured_s = report.particles as f64 / measured;
                 say!(
                     "  model check, 2 ranks x 1 thread here: predicted {:.1} us per step, \
                      measured {:.1} us (measured / predicted {:.2})",
@@ -893,11 +966,52 @@ pub fn run(a: &BenchRequest) -> Result<BenchReport> {
             }
         }
     }
-    write_atomic(
-        &out.join("bench.json"),
-        serde_json::to_string_pretty(&report)?.as_bytes(),
-    )?;
-    super::note_summary(&out.join("bench.json"));
-    say!("bench.json: {}", out.join("bench.json").display());
+    Ok(())
+}
+
+/// Measures, prints, writes `bench.json`; the report. Every round runs every configuration
+/// once, in the same order (native here, native over ranks, LIGGGHTS), so that a ratio is
+/// taken between runs minutes apart on the same machine.
+pub fn run(a: &BenchRequest) -> Result<BenchReport> {
+    check(a)?;
+    let world = world_ranks(a)?;
+    std::fs::create_dir_all(&a.out).map_err(|e| Error::io(&a.out, e))?;
+    let rss0 = peak_rss();
+    let b = Bench::new(a)?;
+    let mut link = if world > 1 {
+        let l = probe_ranks_link();
+        if let Some(l) = &l {
+            say!(
+                "  link between the {world} ranks: {:.2} us per message, {:.2} GB/s",
+                l.latency_s * 1e6,
+                1e-9 / l.seconds_per_byte.max(1e-15)
+            );
+        }
+        l
+    } else {
+        None
+    };
+    let mut rows = Vec::new();
+    let mut firsts = Firsts::default();
+    for round in 0..a.rounds {
+        if a.rounds > 1 {
+            say!("  round {} of {}", round + 1, a.rounds);
+        }
+        if world > 1 || a.ranks.contains(&1) {
+            rows.extend(native_rows(a, &b, world, round, rss0, &mut firsts)?);
+        }
+        if world == 1 {
+            rows.extend(ranks_rows(a, round, &mut link)?);
+        }
+        if let Some(lr) = &a.liggghts {
+            rows.extend(liggghts_rows(a, lr, &b, round)?);
+        }
+    }
+    let report = summarise(a, b.n, rows, firsts, link)?;
+    say_summary(&report)?;
+    let file = a.out.join("bench.json");
+    write_atomic(&file, serde_json::to_string_pretty(&report)?.as_bytes())?;
+    super::note_summary(&file);
+    say!("bench.json: {}", file.display());
     Ok(report)
 }
