@@ -121,10 +121,29 @@ pub fn write_page(night: crate::run::nightly::Night, out: &Path) -> Result<Night
     night.finish(&page)
 }
 
-/// The report page.
+/// The report page: the headline (verdict, what ran, the counts), then its sections.
 pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<String> {
     let plots = out.join("plots");
     let mut p = Page::new(&format!("verify nightly {}", s.date_utc));
+    headline(&mut p, s);
+    overview(&mut p, s);
+    steady_friction(&mut p, s, &plots)?;
+    p.heading("trends", "Trends over nights");
+    let figs = trend_plots(&mut p, history, s, &plots)?;
+    p.figures(&figs);
+
+    p.heading("shear", "Shear cases");
+    for r in &s.shear {
+        shear_section(&mut p, r, out)?;
+    }
+
+    performance(&mut p, s);
+    contact_cases(&mut p, s, out)?;
+    Ok(p.finish())
+}
+
+/// The night's verdict banner, what ran where, errors, and the agreement counts.
+fn headline(p: &mut Page, s: &NightlySummary) {
     p.push(html! { h1 { "Native DEM vs LIGGGHTS: nightly agreement report" } });
     let undecided = s.shear.iter().filter(|r| r.inconclusive).count();
     let (verdict, class) = if s.pass && undecided > 0 {
@@ -187,8 +206,10 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
             " cases agree, " (undecided) " inconclusive; largest |Δμ| between the codes " (format!("{dmu_max:.3}")) "."
         }
     });
+}
 
-    // overview
+/// One row per shear and contact case: status, what was measured, the tolerance.
+fn overview(p: &mut Page, s: &NightlySummary) {
     p.heading("overview", "Overview");
     let mut rows = Vec::new();
     for r in &s.shear {
@@ -253,8 +274,11 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         ],
         &rows,
     ));
+}
 
-    // steady friction
+/// Both codes' steady mu per shear case, as bars with their 95 % CIs (also written to
+/// plots/steady_mu.svg).
+fn steady_friction(p: &mut Page, s: &NightlySummary, plots: &Path) -> Result<()> {
     p.heading("steady", "Steady friction coefficient, both codes");
     let groups: Vec<BarGroup> = s
         .shear
@@ -284,19 +308,11 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         "Steady μ per shear case; whiskers: 95 % confidence interval (over seeds; one seed: over 10 blocks of the window).",
     );
     p.figures(&[fig]);
+    Ok(())
+}
 
-    // trends
-    p.heading("trends", "Trends over nights");
-    let figs = trend_plots(&mut p, history, s, &plots)?;
-    p.figures(&figs);
-
-    // shear cases
-    p.heading("shear", "Shear cases");
-    for r in &s.shear {
-        shear_section(&mut p, r, out)?;
-    }
-
-    // performance
+/// Each shear case's wall time and throughput in both codes, and the night's totals.
+fn performance(p: &mut Page, s: &NightlySummary) {
     p.heading("performance", "Wall time and throughput");
     let mut rows = Vec::new();
     for r in &s.shear {
@@ -346,8 +362,10 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         contact_wall,
         s.wall_time_s / 60.0
     ));
+}
 
-    // contact cases
+/// Each contact run: both codes' main channel overlaid and the error against time.
+fn contact_cases(p: &mut Page, s: &NightlySummary, out: &Path) -> Result<()> {
     p.heading("contact", "Contact cases");
     p.para(
         "Per run: the main channel (rolling moment, tangential or normal force) of LIGGGHTS (solid) \
@@ -387,7 +405,7 @@ pub fn report(s: &NightlySummary, history: &[Record], out: &Path) -> Result<Stri
         "Files: summary.json (schema in docs/nightly.md), contact/<case>_<model>/ and shear/<case>/ \
          with each code's CSV, decks and logs; the history file holds one JSON line per case per night.",
     );
-    Ok(p.finish())
+    Ok(())
 }
 
 fn anchor(dir: &str) -> String {

@@ -157,28 +157,14 @@ impl ConvergenceRequest {
     }
 }
 
-/// Runs the study (reusing every stored current run), prints its table and writes
-/// `summary.json`; the figures are the report's ([`crate::report::convergence::plots`], drawn
-/// by the command from the summary's points).
-pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
-    a.validate()?;
+/// Every planned run's series, by code and dt factor (seeds in order): a run whose current
+/// series is stored (same input hash) is read, not run again; the others run from their seed's
+/// compacted state at the preset's dt (native, made once per seed, shared by every dt and code).
+fn series_by_point(
+    a: &ConvergenceRequest,
+    lig: Option<&crate::liggghts::Liggghts>,
+) -> Result<Vec<(StudyCode, f64, Vec<Series>)>> {
     let sh = &a.shear;
-    let lig = if sh.engine.runs_liggghts() {
-        Some(sh.liggghts.locate()?)
-    } else {
-        None
-    };
-    let out = sh.out.clone();
-    let factors = a.factors();
-    say!(
-        "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
-        sh.case.preset,
-        format!("{:?}", sh.engine).to_lowercase(),
-        sh.seeds,
-        out.display()
-    );
-    // per seed: the compacted state at the preset's dt (native), shared by every dt and code;
-    // a run whose current series is stored (same input hash) is not run again
     let mut per: Vec<(StudyCode, f64, Vec<Series>)> = Vec::new();
     let mut seed_state: Option<(u64, ShearCase, Option<crate::packing::Packing>)> = None;
     for (seed, code, f, cc) in a.planned_runs()? {
@@ -186,7 +172,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             seed_state = Some((seed, sh.seed_case(seed)?.0, None));
         }
         let (_, case, state) = seed_state.as_mut().expect("set above");
-        let dir = out.join(format!("dt{f}")).join(format!("seed{seed}"));
+        let dir = sh.out.join(format!("dt{f}")).join(format!("seed{seed}"));
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let hash = run_input_hash(&cc, code.keyword())?;
         let s = match stored_series(&dir, code.keyword(), &hash) {
@@ -209,7 +195,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
                     run_liggghts(
                         &cc,
                         state,
-                        lig.as_ref().expect("located"),
+                        lig.expect("located"),
                         &dir,
                         &Progress::hidden(),
                         Checkpointing::Every(CHECKPOINT_EVERY),
@@ -234,10 +220,15 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             None => per.push((code, f, vec![s])),
         }
     }
-    let (case0, _) = sh.seed_case(sh.case.seed)?;
+    Ok(per)
+}
+
+/// Each code's point at each dt factor: its steady values over the seeds, in the last stage's
+/// steady window, and the case's stability figures.
+fn points_of(case0: &ShearCase, per: &[(StudyCode, f64, Vec<Series>)]) -> Result<Vec<DtPoint>> {
     let mut points = Vec::new();
-    for (code, f, series) in &per {
-        let mut c = at_factor(&case0, *f)?;
+    for (code, f, series) in per {
+        let mut c = at_factor(case0, *f)?;
         let ends = c.run_ends();
         let window = steady_window(ends[ends.len() - 2], ends[ends.len() - 1]);
         let st = steady(series, window, c.box_x * c.box_z);
@@ -252,17 +243,34 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             stability: stability(&c),
         });
     }
-    // verdict per code: converged when its two smallest dt are equivalent (the steady mu's
-    // paired difference over seeds, each seed from one compacted state, within the margin:
-    // crate::compare::equivalence; one seed: the two block CIs); the study's verdict comes from
-    // the codes that ran down to the smallest factor (LIGGGHTS limited by
-    // --liggghts-dt-factors is judged, and reported, but does not decide it)
-    let margin = sh.mu_margin;
-    let test = |x: &DtPoint, y: &DtPoint| -> Equivalence {
-        let (a, b) = (&x.steady, &y.steady);
-        equivalence(&a.per_seed_mu, &b.per_seed_mu, margin)
-            .unwrap_or_else(|| equivalence_one_seed(a.mu, a.mu_ci95, b.mu, b.mu_ci95, margin))
-    };
+    Ok(points)
+}
+
+/// Two points' steady mu equivalent within `margin`: the paired difference over seeds (each
+/// seed from one compacted state, [`equivalence`]); one seed: the two block CIs.
+fn equivalent(x: &DtPoint, y: &DtPoint, margin: f64) -> Equivalence {
+    let (a, b) = (&x.steady, &y.steady);
+    equivalence(&a.per_seed_mu, &b.per_seed_mu, margin)
+        .unwrap_or_else(|| equivalence_one_seed(a.mu, a.mu_ci95, b.mu, b.mu_ci95, margin))
+}
+
+/// The study's judgement of its points.
+struct Judged {
+    per_code: Vec<CodeVerdict>,
+    converged: bool,
+    inconclusive: bool,
+    largest: Option<f64>,
+    codes_agree: Vec<(f64, Equivalence)>,
+    implicit_matches_finest: Option<Equivalence>,
+}
+
+/// Verdict per code: converged when its two smallest dt are equivalent; the study's verdict
+/// comes from the codes that ran down to the smallest factor (LIGGGHTS limited by
+/// --liggghts-dt-factors is judged, and reported, but does not decide it). Beside it: the
+/// two codes at each dt both ran (native - LIGGGHTS, paired by seed), and the stable-dashpot
+/// model at the largest dt against native epsd at the smallest.
+fn judge(points: &[DtPoint], factors: &[f64], margin: f64) -> Judged {
+    let test = |x: &DtPoint, y: &DtPoint| equivalent(x, y, margin);
     let finest_factor = factors[factors.len() - 1];
     let mut per_code = Vec::new();
     for code in [StudyCode::Native, StudyCode::Liggghts] {
@@ -311,7 +319,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
     } else {
         None
     };
-    // the two codes at each dt both ran: native - LIGGGHTS, paired by seed
     let codes_agree: Vec<(f64, Equivalence)> = factors
         .iter()
         .filter_map(|f| {
@@ -324,7 +331,6 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             Some((*f, test(l, n)))
         })
         .collect();
-    // the stable-dashpot model at the largest dt against native epsd at the smallest
     let implicit_matches_finest = points
         .iter()
         .find(|p| p.code == StudyCode::Implicit)
@@ -332,6 +338,19 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             let finest = points.iter().rfind(|p| p.code == StudyCode::Native)?;
             Some(test(finest, im))
         });
+    Judged {
+        per_code,
+        converged,
+        inconclusive,
+        largest,
+        codes_agree,
+        implicit_matches_finest,
+    }
+}
+
+/// The study's table (a line per code and dt) and its verdicts, said line by line.
+fn say_table(points: &[DtPoint], j: &Judged, factors: &[f64], margin: f64) {
+    let finest_factor = factors[factors.len() - 1];
     say!(
         "\n  {:<9} {:>9} {:>10} {:>18} {:>22} {:>8}",
         "code",
@@ -341,7 +360,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         "E_rot [J] (95 % CI)",
         "S max"
     );
-    for p in &points {
+    for p in points {
         say!(
             "  {:<9} {:>9} {:>10.3e} {:>9.4} +- {:<6.4} {:>11.3e} +- {:<8.2e} {:>8.2}",
             p.code,
@@ -361,7 +380,7 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             e.figures()
         )
     };
-    for v in &per_code {
+    for v in &j.per_code {
         say!(
             "  {}: down to dt factor {}: its two smallest dt: {}{}",
             v.code,
@@ -376,30 +395,57 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
             }
         );
     }
-    for (f, e) in &codes_agree {
+    for (f, e) in &j.codes_agree {
         say!("  dt factor {f}: native - LIGGGHTS: {}", says(e));
     }
     say!(
         "  verdict: {}; largest converged dt factor: {}",
-        if converged {
+        if j.converged {
             "converged (the two smallest dt are equivalent)"
-        } else if inconclusive {
+        } else if j.inconclusive {
             "inconclusive (more seeds would decide)"
         } else {
             "NOT converged"
         },
-        largest
+        j.largest
             .map(|f| f.to_string())
             .unwrap_or_else(|| "none".into())
     );
-    if let Some(e) = &implicit_matches_finest {
+    if let Some(e) = &j.implicit_matches_finest {
         say!(
             "  epsd_implicit at dt factor {} - native epsd at dt factor {}: {}",
             factors[0],
-            factors[factors.len() - 1],
+            finest_factor,
             says(e)
         );
     }
+}
+
+/// Runs the study (reusing every stored current run), prints its table and writes
+/// `summary.json`; the figures are the report's ([`crate::report::convergence::plots`], drawn
+/// by the command from the summary's points).
+pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
+    a.validate()?;
+    let sh = &a.shear;
+    let lig = if sh.engine.runs_liggghts() {
+        Some(sh.liggghts.locate()?)
+    } else {
+        None
+    };
+    let factors = a.factors();
+    say!(
+        "verify convergence: preset {}, dt factors {factors:?}, engine {}, {} seed(s), output {}",
+        sh.case.preset,
+        format!("{:?}", sh.engine).to_lowercase(),
+        sh.seeds,
+        sh.out.display()
+    );
+    let per = series_by_point(a, lig.as_ref())?;
+    let (case0, _) = sh.seed_case(sh.case.seed)?;
+    let points = points_of(&case0, &per)?;
+    let margin = sh.mu_margin;
+    let j = judge(&points, &factors, margin);
+    say_table(&points, &j, &factors, margin);
     let summary = ConvergenceSummary {
         schema: super::SCHEMA,
         preset: sh.case.preset,
@@ -408,21 +454,19 @@ pub fn run(a: &ConvergenceRequest) -> Result<ConvergenceSummary> {
         eta_r: case0.material.rolling_damping,
         stage: case0.stages.len() - 1,
         speed: case0.stages[case0.stages.len() - 1].speed,
-        converged,
-        inconclusive,
+        converged: j.converged,
+        inconclusive: j.inconclusive,
         mu_margin: margin,
-        largest_converged_factor: largest,
-        per_code,
-        codes_agree,
-        implicit_matches_finest,
+        largest_converged_factor: j.largest,
+        per_code: j.per_code,
+        codes_agree: j.codes_agree,
+        implicit_matches_finest: j.implicit_matches_finest,
         points,
         date_utc: utc_stamp(),
     };
-    write_atomic(
-        &out.join("summary.json"),
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
-    super::note_summary(&out.join("summary.json"));
-    say!("  summary: {}", out.join("summary.json").display());
+    let file = sh.out.join("summary.json");
+    write_atomic(&file, serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    super::note_summary(&file);
+    say!("  summary: {}", file.display());
     Ok(summary)
 }
