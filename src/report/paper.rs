@@ -336,6 +336,15 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
             let Some(sl) = speed_slope(&by_stage) else {
                 continue;
             };
+            if !sl.ci95.is_finite() {
+                // one seed: the slope has no spread over seeds, so no CI; its number alone
+                // would read as a measurement it is not
+                ev.push(format!(
+                    "(mu_r {m}, eta_r {e}): one seed, so the slope over the speeds has no CI \
+                     (2 or more seeds give one)"
+                ));
+                continue;
+            }
             if sl.mean.abs() <= sl.ci95 {
                 ev.push(format!(
                     "(mu_r {m}, eta_r {e}): slope {:+.4} ± {:.4} per decade of speed, no effect",
@@ -739,6 +748,12 @@ mod tests {
         assert_eq!(c[0].verdict, ClaimVerdict::NotResolved, "{}", c[0].evidence);
         assert_eq!(c[1].verdict, ClaimVerdict::NotResolved, "{}", c[1].evidence);
         assert_eq!(c[2].verdict, ClaimVerdict::NotResolved, "{}", c[2].evidence);
+        // a slope without a CI is not printed as a number (it was "+0.0224 ± inf")
+        assert!(
+            !c[2].evidence.contains("inf") && c[2].evidence.contains("one seed"),
+            "{}",
+            c[2].evidence
+        );
     }
 
     #[test]
