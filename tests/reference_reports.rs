@@ -39,7 +39,7 @@ fn every_stored_page_is_made_again_by_this_version() {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     let tmp = tempfile::tempdir().unwrap();
     let root = tmp.path().join("reference");
-    for d in ["nightly", "sweep"] {
+    for d in ["nightly", "sweep", "paper-protocol"] {
         copy(&here.join("reference").join(d), &root.join(d));
     }
     let stored = pages(&root);
@@ -118,27 +118,49 @@ fn verdicts_are_as_written(root: &Path) {
             .collect();
         assert_eq!(&got, rows.as_table().unwrap(), "night {night}");
     }
-    let sweeps = written["sweep"].as_table().unwrap();
-    let stored: Vec<String> = std::fs::read_dir(root.join("sweep"))
+    // the sweeps of reference/sweep and the paper protocol's (whose pages show the fast
+    // preset's speed study beside them: its verdicts there too)
+    for group in ["sweep", "paper-protocol"] {
+        sweep_verdicts_are_as_written(root, group, written[group].as_table().unwrap());
+    }
+}
+
+fn sweep_verdicts_are_as_written(root: &Path, group: &str, sweeps: &toml::Table) {
+    let mut stored: Vec<String> = std::fs::read_dir(root.join(group))
         .unwrap()
         .map(|e| e.unwrap().path())
         .filter(|p| p.join("runs").is_dir())
         .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
         .collect();
+    stored.sort();
     assert_eq!(
-        stored.len(),
-        sweeps.len(),
-        "every stored sweep is written down"
+        stored,
+        sweeps.keys().cloned().collect::<Vec<_>>(),
+        "every stored sweep of {group} is written down"
     );
     for (sweep, want) in sweeps {
         let rep: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(root.join("sweep").join(sweep).join("report.json")).unwrap(),
+            &std::fs::read_to_string(root.join(group).join(sweep).join("report.json")).unwrap(),
         )
         .unwrap();
         let want = want.as_table().unwrap();
         assert!(want.contains_key("conclusions"), "sweep {sweep}");
-        for key in ["conclusions", "converged_conclusions"] {
-            let got: Vec<String> = rep[key]
+        let beside = &rep["beside"];
+        assert_eq!(
+            beside.is_object(),
+            want.contains_key("beside_conclusions"),
+            "sweep {sweep}: a study beside it exactly when written down"
+        );
+        for (key, got) in [
+            ("conclusions", &rep["conclusions"]),
+            ("converged_conclusions", &rep["converged_conclusions"]),
+            ("beside_conclusions", &beside["conclusions"]),
+            (
+                "beside_converged_conclusions",
+                &beside["converged_conclusions"],
+            ),
+        ] {
+            let got: Vec<String> = got
                 .as_array()
                 .map(|sets| {
                     sets.iter()

@@ -1,21 +1,82 @@
 #!/usr/bin/env bash
 # Folds the finished paper-protocol runs (issue #37, docs/paper-protocol.md) into
-# reference/paper-protocol/<study>/: per run its result.json, summary.json and figures; per
-# seed its case, velocity profiles, run record (native_run.json), rotation map and series
-# (native.csv.gz: gzip -n, checked against the SHA-256 its native_run.json records before it is
-# kept); and the study's report made again by the installed binary (`verify sweep report`,
-# partial until every run is done). Never checkpoints or ParaView snapshots. A run folded
-# before is checked again (its series' SHA-256), not copied twice.
+# reference/paper-protocol/<study>/: per sweep run its result.json with its record
+# (result.json.sha256: the manifest entry's input hash and the file's SHA-256, written here
+# because the installed binary (cd821d5) writes none; with it this version reads the stored
+# results), summary.json and figures; per seed its case, velocity profiles, run records
+# (<code>_run.json), rotation map and series (<code>.csv.gz: gzip -n, checked against the
+# SHA-256 its run record holds before it is kept); per convergence study its summary, page and
+# figures. Never checkpoints, restart files or ParaView snapshots. A run folded before is
+# checked again (its series' SHA-256), not copied twice. Then every page under reference/ is
+# made again by this clone's binary (tools/rerender-reference.sh: the paper protocol's pages
+# with the implicit runs as stand-ins and the fast preset's speed study beside them).
 #   bash tools/paper-protocol-fold.sh [DIR]     DIR default /work/paper-protocol
+#   VERIFY=path/to/verify changes the binary that makes the pages (default: target/release,
+#   built if missing)
 set -euo pipefail
 dir=${1:-/work/paper-protocol}
 repo=$(cd "$(dirname "$0")/.." && pwd)
-bin=$(ls -d "$dir"/bin-*/bin/verify 2>/dev/null | head -1)
-[ -x "$bin" ] || { echo "error: no installed binary under $dir (run tools/paper-protocol.sh)" >&2; exit 2; }
+verify=${VERIFY:-$repo/target/release/verify}
+[ -x "$verify" ] || (cd "$repo" && cargo build --release --quiet)
+[ -d "$dir/runs" ] || { echo "error: no runs under $dir (run tools/paper-protocol.sh)" >&2; exit 2; }
 sha_of() { python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["sha256"])' "$1"; }
+# the record of a folded result.json: the input hash its manifest entry names, its SHA-256
+record() {
+  python3 - "$1" "$2" <<'EOF'
+import hashlib, json, sys
+manifest, result = sys.argv[1], sys.argv[2]
+res = json.load(open(result))
+# a result carries its manifest entry's fields (index, id, point, seed, input hash) flattened
+entry = [r for r in json.load(open(manifest))["runs"] if r["id"] == res.get("id")]
+if len(entry) != 1 or any(res.get(k) != v for k, v in entry[0].items()):
+    sys.exit(f"error: {result} is not the result of its manifest's entry {res.get('id')}")
+digest = hashlib.sha256(open(result, "rb").read()).hexdigest()
+with open(result + ".sha256.tmp", "w") as f:
+    f.write(f"{entry[0]['input_hash']} {digest}\n")
+EOF
+  mv "$2.sha256.tmp" "$2.sha256"
+}
+fold_seed() { # SEED-DIR DEST
+  local seed=$1 dest=$2 code want got
+  mkdir -p "$dest"
+  for code in native liggghts; do
+    [ -f "$seed/${code}_run.json" ] || continue
+    want=$(sha_of "$seed/${code}_run.json")
+    if [ -f "$dest/$code.csv.gz" ]; then
+      got=$(gzip -dc "$dest/$code.csv.gz" | sha256sum | cut -d' ' -f1)
+    else
+      got=$(sha256sum "$seed/$code.csv" | cut -d' ' -f1)
+      [ "$got" = "$want" ] && gzip -nc "$seed/$code.csv" > "$dest/$code.csv.gz.tmp" \
+        && mv "$dest/$code.csv.gz.tmp" "$dest/$code.csv.gz"
+    fi
+    if [ "$got" != "$want" ]; then
+      echo "error: $seed: $code series SHA-256 $got, its ${code}_run.json says $want: not folded" >&2
+      exit 1
+    fi
+    cp "$seed/${code}_run.json" "$dest/"
+    for f in "${code}_profile.csv" "${code}_profile.json"; do
+      [ -f "$seed/$f" ] && cp "$seed/$f" "$dest/"
+    done
+  done
+  for f in case.toml rotation_map.svg; do
+    [ -f "$seed/$f" ] && cp "$seed/$f" "$dest/"
+  done
+  return 0
+}
 for study in "$dir"/runs/paper-protocol-*; do
   name=${study##*/paper-protocol-}
   out="$repo/reference/paper-protocol/$name"
+  if [ ! -f "$study/manifest.json" ]; then
+    # a convergence study: folded once it has written its summary
+    [ -f "$study/summary.json" ] || continue
+    mkdir -p "$out"
+    for f in summary.json report.html study.toml; do
+      [ -f "$study/$f" ] && cp "$study/$f" "$out/"
+    done
+    cp "$study"/*.svg "$out"/ 2>/dev/null || true
+    echo "$name: convergence summary folded"
+    continue
+  fi
   folded=0
   for run in "$study"/runs/*/; do
     run=${run%/}
@@ -24,36 +85,19 @@ for study in "$dir"/runs/paper-protocol-*; do
     dest="$out/runs/$id"
     mkdir -p "$dest"
     cp "$run"/result.json "$run"/summary.json "$dest"/
+    record "$study/manifest.json" "$dest/result.json"
     cp "$run"/*.svg "$dest"/ 2>/dev/null || true
     for seed in "$run"/seed*/; do
       seed=${seed%/}
-      s=${seed##*/}
-      mkdir -p "$dest/$s"
-      want=$(sha_of "$seed/native_run.json")
-      if [ -f "$dest/$s/native.csv.gz" ]; then
-        got=$(gzip -dc "$dest/$s/native.csv.gz" | sha256sum | cut -d' ' -f1)
-      else
-        got=$(sha256sum "$seed/native.csv" | cut -d' ' -f1)
-        [ "$got" = "$want" ] && gzip -nc "$seed/native.csv" > "$dest/$s/native.csv.gz.tmp" \
-          && mv "$dest/$s/native.csv.gz.tmp" "$dest/$s/native.csv.gz"
-      fi
-      if [ "$got" != "$want" ]; then
-        echo "error: $seed: series SHA-256 $got, its native_run.json says $want: not folded" >&2
-        exit 1
-      fi
-      for f in case.toml native_profile.csv native_profile.json native_run.json rotation_map.svg; do
-        [ -f "$seed/$f" ] && cp "$seed/$f" "$dest/$s/"
-      done
+      fold_seed "$seed" "$dest/${seed##*/}"
     done
     folded=$((folded + 1))
-    echo "$name: $id folded (series SHA-256 checked)"
+    echo "$name: $id folded (series SHA-256 checked, result recorded)"
   done
   [ "$folded" -gt 0 ] || continue
-  # the study's report, made by the installed binary in the run folder, copied with its inputs
-  "$bin" sweep report "$study" > "$study/report.log" 2>&1 || true
   cp "$study"/manifest.json "$out"/
-  for f in report.html report.json; do [ -f "$study/$f" ] && cp "$study/$f" "$out/"; done
-  [ -d "$study/figures" ] && mkdir -p "$out/figures" && cp "$study"/figures/*.svg "$out/figures/"
   cp "$dir/studies/paper-protocol-$name.toml" "$out/study.toml"
-  echo "$name: $folded run(s) in $out (report: $study/report.log)"
+  echo "$name: $folded run(s) in $out"
 done
+# every page under reference/, the paper protocol's included, made by this clone's binary
+bash "$repo/tools/rerender-reference.sh" "$repo/reference" "$verify"

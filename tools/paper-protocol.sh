@@ -22,17 +22,44 @@ if [ ! -x "$bin" ]; then
   printf 'binary: %s\ncommit: %s\nbuilt: %s on %s (%s)\n' "$bin" "$commit" "$(date -u +%FT%TZ)" \
     "$(hostname)" "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)" >> PROVENANCE
 fi
+# Two slots, one core each; each runs its queue of studies in order. A finished study is passed
+# over in seconds (its results are reused), so rerunning the queue resumes where it stopped:
+# epsd: the five seed-1 points, then their seed 2 (the eta_r = 0.5 points first, the manifest's
+# order); implicit: its two seed-1 points, their seed 2, then the 1 mm/s convergence checks at
+# (1, 0.5) and (0.5, 0.5), then LIGGGHTS on the paper's protocol at (1, 0.5) (resumed from its
+# restart files). A study that fails stops its queue (said in runs.log).
+queue_epsd=("paper-protocol-epsd.toml" "paper-protocol-epsd.toml --seeds 2")
+queue_implicit=("paper-protocol-implicit.toml" "paper-protocol-implicit.toml --seeds 2"
+  "paper-protocol-convergence-mur1.toml" "paper-protocol-convergence-mur0.5.toml"
+  "paper-protocol-liggghts.toml")
+if [ "${QUEUE:-}" ]; then
+  # the queue itself, started below in a session of its own (pause it and the runs it started
+  # with `kill -STOP -- -$(cat pid-NAME)`, resume with -CONT)
+  declare -n queue="queue_$QUEUE"
+  for study in "${queue[@]}"; do
+    echo "$(date -u +%FT%TZ) $QUEUE: verify run studies/$study ($bin)" >> runs.log
+    # shellcheck disable=SC2086 # a study and its extra flags, split on purpose
+    if ! "$bin" run studies/$study; then
+      echo "$(date -u +%FT%TZ) $QUEUE: studies/$study failed: queue stopped" >> runs.log
+      exit 1
+    fi
+  done
+  echo "$(date -u +%FT%TZ) $QUEUE: queue done" >> runs.log
+  exit 0
+fi
 cp -n "$repo"/studies/paper-protocol-*.toml studies/
-# Both at normal priority since epsd's (1, 0.5) finished (2026-12-05): epsd_implicit's (1, 0.5)
-# is the other half of the decisive pair (until then it ran at nice 19 on what was left)
+# alive: a process that exists and is not a zombie (an exited queue nobody reaped yet)
+alive() { [ -n "$(ps -o stat= -p "$1" 2>/dev/null | grep -v '^Z')" ]; }
 for s in epsd implicit; do
-  if [ -f "pid-$s" ] && kill -0 "$(cat "pid-$s")" 2>/dev/null; then
+  if [ -f "pid-$s" ] && alive "$(cat "pid-$s")"; then
     echo "$s: running (pid $(cat "pid-$s"))"
     continue
   fi
-  n=0
-  echo "$(date -u +%FT%TZ) start $s (nice $n, $bin)" >> runs.log
-  nohup nice -n "$n" "$bin" run "studies/paper-protocol-$s.toml" >> "log-$s.txt" 2>&1 &
+  echo "$(date -u +%FT%TZ) start queue $s ($bin)" >> runs.log
+  # the queue runs a copy of this script (a new file each time, so a queue still running keeps
+  # reading the one it started with)
+  cp "$repo/tools/paper-protocol.sh" queue.sh.tmp && mv queue.sh.tmp queue.sh
+  QUEUE=$s setsid nohup bash queue.sh "$dir" >> "log-$s.txt" 2>&1 &
   echo $! > "pid-$s"
-  echo "$s: started (pid $!), log $dir/log-$s.txt"
+  echo "$s: queue started (pid $!, its own process group), log $dir/log-$s.txt"
 done

@@ -6,7 +6,7 @@ use crate::cli::args::{EngineArg, PresetArg, RollingArg};
 use crate::cli::shear::ProtocolArgs;
 use crate::error::{Error, Result};
 use crate::fsutil::write_atomic;
-use crate::report::sweep::report;
+use crate::report::sweep::{report, Beside};
 use crate::run::sweep::{
     collect_dir, plan, run_dir, run_one, run_pending, slurm_script, Manifest, RunResult, SweepBase,
     SweepRequest,
@@ -49,6 +49,15 @@ pub enum SweepAction {
         /// `verify convergence` study (its finest native dt); repeat for several.
         #[arg(long)]
         converged: Vec<PathBuf>,
+        /// Another sweep whose conclusions are shown beside these, claim by claim, judged
+        /// from its own results (e.g. the fast preset's speed study beside the paper
+        /// protocol).
+        #[arg(long)]
+        beside: Option<PathBuf>,
+        /// The stand-ins of the --beside sweep, as --converged are this one's; repeat for
+        /// several.
+        #[arg(long, requires = "beside")]
+        beside_converged: Vec<PathBuf>,
     },
 }
 
@@ -153,8 +162,17 @@ pub fn sweep(a: SweepArgs) -> Result<Verdict> {
             );
             Ok(Verdict::Done)
         }
-        Some(SweepAction::Report { dir, converged }) => {
-            report(&dir, &converged)?;
+        Some(SweepAction::Report {
+            dir,
+            converged,
+            beside,
+            beside_converged,
+        }) => {
+            let beside = beside.map(|dir| Beside {
+                dir,
+                converged: beside_converged,
+            });
+            report(&dir, &converged, beside.as_ref())?;
             Ok(Verdict::Done)
         }
         None => plan_and_run(a.plan),
@@ -292,6 +310,6 @@ fn plan_and_run(p: PlanArgs) -> Result<Verdict> {
         )));
     }
     collect_dir(&out)?;
-    report(&out, &[])?;
+    report(&out, &[], None)?;
     Ok(Verdict::Done)
 }

@@ -183,6 +183,24 @@ pub fn critical_mu_r(curve: &[&Point]) -> Option<(f64, f64)> {
         .then_some((best.mu_r, drop))
 }
 
+/// A curve of eta_r > 0 with its mu_r = 0 end: a point of its own there, else the eta_r = 0
+/// curve's (returned true). At mu_r = 0 every rolling model's torque is zero whatever eta_r
+/// (k_r = 0: the spring, its cap and the dashpot `eta_r 2 sqrt(I_r k_r)` vanish; tested bit for
+/// bit on sheared states, `solver::shear` `eta_r_acts_on_nothing_at_mu_r_zero`), so a study
+/// need not run (0, eta_r) beside (0, 0): the paper protocol runs only the latter.
+fn with_mu_r_zero<'a>(mut curve: Vec<&'a Point>, undamped: &[&'a Point]) -> (Vec<&'a Point>, bool) {
+    if curve.iter().any(|p| p.mu_r == 0.0) {
+        return (curve, false);
+    }
+    match undamped.iter().find(|p| p.mu_r == 0.0) {
+        Some(z) => {
+            curve.insert(0, z);
+            (curve, true)
+        }
+        None => (curve, false),
+    }
+}
+
 /// The three conclusions for one code's points (the paper: with eta_r = 0 mu rises with mu_r;
 /// with eta_r > 0 there is a critical mu_r beyond which mu falls; a speed effect only near that
 /// critical point).
@@ -249,10 +267,15 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
     let mut criticals: Vec<(usize, f64, f64)> = Vec::new();
     for &s in &stages {
         for &e in etas.iter().filter(|&&e| e > 0.0) {
-            let c = curve(s, e);
+            let (c, borrowed) = with_mu_r_zero(curve(s, e), &curve(s, 0.0));
             if c.len() < 3 {
                 continue;
             }
+            let borrowed = if borrowed {
+                " (mu_r 0: the eta_r 0 run, eta_r acting on nothing at mu_r 0)"
+            } else {
+                ""
+            };
             let unstable = if c.iter().any(|p| !p.dashpot_stable) {
                 " [explicit dashpot unstable at some of these points]"
             } else {
@@ -263,7 +286,7 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
                     verdicts.push(Verdict::Agree);
                     criticals.push((s, e, m));
                     ev.push(format!(
-                        "v = {} m/s, eta_r {e}: critical mu_r = {m} (mu falls by {drop:.3} up to mu_r {}){unstable}",
+                        "v = {} m/s, eta_r {e}: critical mu_r = {m} (mu falls by {drop:.3} up to mu_r {}){unstable}{borrowed}",
                         c[0].speed,
                         c[c.len() - 1].mu_r,
                     ));
@@ -278,7 +301,7 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
                         Verdict::Unresolved
                     });
                     ev.push(format!(
-                        "v = {} m/s, eta_r {e}: no significant fall of mu up to mu_r {} ({}){unstable}",
+                        "v = {} m/s, eta_r {e}: no significant fall of mu up to mu_r {} ({}){unstable}{borrowed}",
                         c[0].speed,
                         last.mu_r,
                         if rises {
@@ -754,6 +777,37 @@ mod tests {
             "{}",
             c[2].evidence
         );
+    }
+
+    /// The paper protocol's points: (0, 0) but no (0, 0.5). Claim 2 takes the eta_r = 0 run as
+    /// the mu_r = 0 end of the eta_r = 0.5 curve and says so; a curve with its own mu_r = 0
+    /// point keeps it.
+    #[test]
+    fn mu_r_zero_ends_every_eta_r_curve() {
+        let protocol: Vec<RunResult> = paper_like()
+            .into_iter()
+            .filter(|r| !(r.run.mu_r == 0.0 && r.run.eta_r == 0.5))
+            .collect();
+        let c = conclusions(&aggregate(&protocol), Code::Native);
+        assert_eq!(c[1].verdict, ClaimVerdict::Agrees, "{}", c[1].evidence);
+        assert!(
+            c[1].evidence.contains("critical mu_r = 0.5")
+                && c[1].evidence.contains("mu_r 0: the eta_r 0 run"),
+            "{}",
+            c[1].evidence
+        );
+        // without the (0, 0) run the curve has two mu_r values: not assessable
+        let two: Vec<RunResult> = protocol.into_iter().filter(|r| r.run.mu_r != 0.0).collect();
+        let c = conclusions(&aggregate(&two), Code::Native);
+        assert_eq!(
+            c[1].verdict,
+            ClaimVerdict::NotAssessable,
+            "{}",
+            c[1].evidence
+        );
+        // the whole map has (0, 0.5) itself: nothing borrowed
+        let c = conclusions(&aggregate(&paper_like()), Code::Native);
+        assert!(!c[1].evidence.contains("eta_r 0 run"), "{}", c[1].evidence);
     }
 
     #[test]

@@ -52,6 +52,9 @@ struct SweepReport {
     converged_conclusions: Vec<(Code, Vec<Conclusion>)>,
     /// Every point as the conclusions on trustworthy numbers use it, with its source.
     judged: Vec<JudgedPoint>,
+    /// Another study's conclusions on the same claims (`--beside`), claim by claim.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    beside: Option<BesideReport>,
     runs: usize,
     run_wall_s_liggghts: f64,
     run_wall_s_native: f64,
@@ -287,8 +290,57 @@ impl Judgement {
     }
 }
 
-/// The paper's figures, the conclusions and a report page from DIR's (current) results.
-pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
+/// Another sweep whose conclusions a report shows beside its own (`--beside DIR
+/// [--beside-converged DIR2 ...]`): e.g. the paper protocol's verdicts beside those of the fast
+/// preset's speed study, the same claims at 20 times the speeds.
+#[derive(Clone, Debug)]
+pub struct Beside {
+    pub dir: PathBuf,
+    /// Its stand-ins, as `--converged` is this sweep's.
+    pub converged: Vec<PathBuf>,
+}
+
+/// The conclusions of a [`Beside`] study, judged from its own results by this version.
+#[derive(Serialize)]
+struct BesideReport {
+    /// The study's folder and its parent (`sweep/speed-explicit-e1`: no machine's path).
+    dir: String,
+    runs: usize,
+    missing: usize,
+    conclusions: Vec<(Code, Vec<Conclusion>)>,
+    converged_conclusions: Vec<(Code, Vec<Conclusion>)>,
+}
+
+impl BesideReport {
+    fn judge(b: &Beside) -> Result<Self> {
+        let m = Manifest::load(&b.dir.join("manifest.json"))?;
+        let (results, missing) = collect(&m, &b.dir);
+        if results.is_empty() {
+            return Err(Error::invalid(
+                "--beside",
+                b.dir.display(),
+                "a sweep directory with results (it has none)",
+            ));
+        }
+        let mut conv_points = Vec::new();
+        for c in &b.converged {
+            conv_points.extend(converged_points(c)?);
+        }
+        let j = Judgement::new(sweep_points(&m, &results, ""), conv_points);
+        let parent = b.dir.parent().map(dir_name).unwrap_or_default();
+        Ok(BesideReport {
+            dir: format!("{parent}/{}", dir_name(&b.dir)),
+            runs: results.len(),
+            missing: missing.len(),
+            conclusions: j.concl,
+            converged_conclusions: j.conv_concl,
+        })
+    }
+}
+
+/// The paper's figures, the conclusions and a report page from DIR's (current) results,
+/// with another study's conclusions beside them when `beside` is given.
+pub fn report(dir: &Path, converged: &[PathBuf], beside: Option<&Beside>) -> Result<()> {
     let m = Manifest::load(&dir.join("manifest.json"))?;
     let (results, missing) = collect(&m, dir);
     if results.is_empty() {
@@ -302,6 +354,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         conv_points.extend(converged_points(c)?);
     }
     let j = Judgement::new(sweep_points(&m, &results, ""), conv_points);
+    let beside = beside.map(BesideReport::judge).transpose()?;
     let mut page = Page::new("DEM sweep: the paper's parametric study");
     page.push(html! { h1 { "Parametric study: steady friction over (mu_r, eta_r)" } });
     let (wall_l, wall_n) = meta(&mut page, &m, &results, dir);
@@ -312,6 +365,10 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
     }
     page.heading("bottom-line", "Bottom line");
     bottom_line(&mut page, &j);
+    if let Some(b) = &beside {
+        page.heading("beside", "Beside another study");
+        beside_section(&mut page, &j, b);
+    }
     page.heading("conclusions", "The paper's conclusions, checked");
     conclusions_section(&mut page, &j);
     unstable_note(&mut page, &j.points);
@@ -340,6 +397,7 @@ pub fn report(dir: &Path, converged: &[PathBuf]) -> Result<()> {
         converged_points: conv_points,
         converged_conclusions: conv_concl,
         judged: judged_points,
+        beside,
         runs: results.len(),
         run_wall_s_liggghts: wall_l,
         run_wall_s_native: wall_n,
@@ -465,6 +523,89 @@ fn bottom_line(page: &mut Page, j: &Judgement) {
                 missing_judged.join(", ")
             )
         }
+    ));
+}
+
+/// Each claim here and in the study beside, as run and on stable or converged numbers, whether
+/// the verdicts are the same, and both sides' evidence (where they differ, the numbers say
+/// why).
+fn beside_section(page: &mut Page, j: &Judgement, b: &BesideReport) {
+    page.para(&format!(
+        "The same claims judged by this version on the {} runs of {}{}: as run, and on stable \
+         or converged numbers where that study was given stand-ins. \"The same\" compares \
+         the verdicts on stable or converged numbers where both have them, else as run.",
+        b.runs,
+        b.dir,
+        if b.missing > 0 {
+            format!(" ({} of its runs have no result yet)", b.missing)
+        } else {
+            String::new()
+        }
+    ));
+    let find = |set: &[(Code, Vec<Conclusion>)], code: Code, k: usize| {
+        set.iter()
+            .find(|(c, _)| *c == code)
+            .and_then(|(_, cs)| cs.get(k))
+            .cloned()
+    };
+    let words = |c: &Option<Conclusion>| {
+        c.as_ref()
+            .map_or("not given".to_string(), |c| c.verdict.words().to_string())
+    };
+    let mut rows: Vec<Vec<(String, &str)>> = Vec::new();
+    for (code, cs) in &j.concl {
+        for (k, here) in cs.iter().enumerate() {
+            let here_stable = find(&j.conv_concl, *code, k);
+            let there = find(&b.conclusions, *code, k);
+            let there_stable = find(&b.converged_conclusions, *code, k);
+            let (a, z) = match (&here_stable, &there_stable) {
+                (Some(a), Some(z)) => (Some(a.clone()), Some(z.clone())),
+                _ => (Some(here.clone()), there.clone()),
+            };
+            let decided = |c: &Conclusion| {
+                matches!(
+                    c.verdict,
+                    ClaimVerdict::Agrees | ClaimVerdict::PartlyAgrees | ClaimVerdict::Disagrees
+                )
+            };
+            let same = match (&a, &z) {
+                (Some(a), Some(z)) if a.verdict == z.verdict => ("the same", "pass"),
+                (Some(a), Some(z)) if decided(a) && decided(z) => ("DIFFERENT", "fail"),
+                (Some(a), Some(_)) if !decided(a) => ("not decided here yet", "warn"),
+                (Some(_), Some(_)) => ("not decided beside", "warn"),
+                _ => ("not compared", "warn"),
+            };
+            rows.push(vec![
+                (format!("{code}"), ""),
+                (here.claim.clone(), ""),
+                (here.verdict.words().to_string(), ""),
+                (words(&here_stable), ""),
+                (words(&there), ""),
+                (words(&there_stable), ""),
+                (same.0.to_string(), same.1),
+                (
+                    format!(
+                        "here: {} | beside: {}",
+                        a.map_or(String::new(), |c| c.evidence),
+                        z.map_or(String::new(), |c| c.evidence)
+                    ),
+                    "",
+                ),
+            ]);
+        }
+    }
+    page.push(table(
+        &[
+            "code",
+            "the paper's claim",
+            "here, as run",
+            "here, stable or converged",
+            "beside, as run",
+            "beside, stable or converged",
+            "verdicts",
+            "evidence compared",
+        ],
+        &text_rows(rows),
     ));
 }
 

@@ -1103,6 +1103,41 @@ mod tests {
         }
     }
 
+    /// At mu_r = 0 eta_r acts on nothing: k_r = 0, so the spring, its cap |Fn| R mu_r and the
+    /// dashpot C_r = eta_r 2 sqrt(I_r k_r) are all zero, for the explicit dashpots (epsd,
+    /// epsd3) and the implicit one. The paper-protocol report leans on it: the (0, 0) run is
+    /// the mu_r = 0 end of the eta_r = 0.5 curve (`report::paper::conclusions`). A sheared
+    /// dense state at (0, 0.5) and at (0, 0): every bit the same.
+    #[test]
+    fn eta_r_acts_on_nothing_at_mu_r_zero() {
+        for model in [
+            RollingModel::Epsd,
+            RollingModel::Epsd3,
+            RollingModel::EpsdImplicit,
+        ] {
+            let run = |eta_r: f64| {
+                let c = ShearCase::preset(crate::spec::shear::Preset::Ci, model, 0.0, eta_r, 2)
+                    .unwrap();
+                let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
+                let mut s = ShearSim::new(&c.setup(), &dense);
+                s.setup(c.stages[0].speed).unwrap();
+                for _ in 0..2000 {
+                    s.step().unwrap();
+                }
+                s
+            };
+            let (damped, undamped) = (run(0.5), run(0.0));
+            assert!(
+                damped.omega.iter().any(|w| w[2] != 0.0),
+                "{model}: grains roll"
+            );
+            assert!(
+                state_bytes(&damped) == state_bytes(&undamped),
+                "{model}: eta_r 0.5 changed a state at mu_r 0"
+            );
+        }
+    }
+
     #[test]
     fn a_blown_up_particle_stops_the_run_at_the_next_rebuild() {
         let mut c = ShearCase::preset(
