@@ -2,7 +2,7 @@
 //! 2022): steady mu against mu_r per eta_r and speed (their Figs 5-7), mu against shear speed
 //! (Figs 12-15), a heat map over (mu_r, eta_r), and the three conclusions checked in numbers.
 
-use crate::compare::{mean_ci95, within_cis};
+use crate::compare::{mean_ci95, t95, within_cis, MAX_SEEDS_NEEDED};
 use crate::error::draw_err;
 use crate::error::Result;
 use crate::run::sweep::RunResult;
@@ -173,6 +173,52 @@ fn ci(p: &Point) -> f64 {
     }
 }
 
+/// A point's CI for the evidence: its half-width, or "no CI (one seed)" (an infinite
+/// half-width is not a number to print).
+fn ci_words(p: &Point) -> String {
+    let c = ci(p);
+    if c.is_finite() {
+        format!("{c:.3}")
+    } else {
+        "no CI (one seed)".into()
+    }
+}
+
+/// The sample standard deviation of a point's per-seed mu (NaN below 2 seeds).
+fn seed_sd(p: &Point) -> f64 {
+    let n = p.per_seed_mu.len();
+    if n < 2 {
+        return f64::NAN;
+    }
+    let m = p.per_seed_mu.iter().map(|s| s.1).sum::<f64>() / n as f64;
+    (p.per_seed_mu.iter().map(|s| (s.1 - m).powi(2)).sum::<f64>() / (n - 1) as f64).sqrt()
+}
+
+/// Seeds per point that would resolve the difference between two points at the spread their
+/// seeds show: the smallest n whose 95 % CIs, t95(n-1) sd / sqrt(n) each, no longer overlap
+/// (`within_cis` false) at the measured difference. None below 2 seeds at either point (no
+/// spread known) or beyond [`MAX_SEEDS_NEEDED`].
+pub fn seeds_to_resolve(a: &Point, b: &Point) -> Option<usize> {
+    let (sa, sb) = (seed_sd(a), seed_sd(b));
+    let gap = (a.mu - b.mu).abs();
+    if !(sa.is_finite() && sb.is_finite() && gap > 0.0) {
+        return None;
+    }
+    (2..=MAX_SEEDS_NEEDED).find(|&n| t95(n - 1) * (sa + sb) / (n as f64).sqrt() < gap)
+}
+
+/// What an unresolved comparison of two points needs: the seeds that would resolve it, or
+/// why that is not known.
+fn to_resolve(a: &Point, b: &Point) -> String {
+    match seeds_to_resolve(a, b) {
+        Some(n) => format!("about {n} seeds per point would resolve it"),
+        None if a.per_seed_mu.len() < 2 || b.per_seed_mu.len() < 2 => {
+            "one seed: 2 or more give the spread that says how many would resolve it".into()
+        }
+        None => format!("more than {MAX_SEEDS_NEEDED} seeds per point would be needed"),
+    }
+}
+
 /// The critical mu_r of one (code, stage, eta_r) curve: the mu_r of the largest mu when mu at
 /// the largest mu_r is significantly lower (by more than the two CIs), else None.
 pub fn critical_mu_r(curve: &[&Point]) -> Option<(f64, f64)> {
@@ -239,16 +285,20 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
             (true, false) => Verdict::Disagree,
         });
         ev.push(format!(
-            "v = {} m/s: mu {:.3} at mu_r {} -> {:.3} at mu_r {} (change {:+.3}, CIs {:.3}/{:.3}){}",
+            "v = {} m/s: mu {:.3} at mu_r {} -> {:.3} at mu_r {} (change {:+.3}, CIs {}/{}){}",
             first.speed,
             first.mu,
             first.mu_r,
             last.mu,
             last.mu_r,
             rise,
-            ci(first),
-            ci(last),
-            if resolved { "" } else { ": within the CIs" }
+            ci_words(first),
+            ci_words(last),
+            if resolved {
+                String::new()
+            } else {
+                format!(": within the CIs, {}", to_resolve(first, last))
+            }
         ));
     }
     out.push(Conclusion {
@@ -300,14 +350,26 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
                     } else {
                         Verdict::Unresolved
                     });
+                    // unresolved: the comparison that would decide it, the largest mu against
+                    // the last (a fall) where the largest comes first, else the ends (a rise)
+                    let best = c
+                        .iter()
+                        .copied()
+                        .max_by(|a, b| a.mu.total_cmp(&b.mu))
+                        .unwrap_or(first);
+                    let (a, z) = if best.mu_r < last.mu_r {
+                        (best, last)
+                    } else {
+                        (first, last)
+                    };
                     ev.push(format!(
                         "v = {} m/s, eta_r {e}: no significant fall of mu up to mu_r {} ({}){unstable}{borrowed}",
                         c[0].speed,
                         last.mu_r,
                         if rises {
-                            "mu rises with mu_r"
+                            "mu rises with mu_r".to_string()
                         } else {
-                            "differences within the CIs"
+                            format!("differences within the CIs; {}", to_resolve(a, z))
                         }
                     ));
                 }
@@ -370,8 +432,14 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
             }
             if sl.mean.abs() <= sl.ci95 {
                 ev.push(format!(
-                    "(mu_r {m}, eta_r {e}): slope {:+.4} ± {:.4} per decade of speed, no effect",
-                    sl.mean, sl.ci95
+                    "(mu_r {m}, eta_r {e}): slope {:+.4} ± {:.4} per decade of speed, no effect \
+                     resolved ({})",
+                    sl.mean,
+                    sl.ci95,
+                    sl.seeds_to_resolve().map_or_else(
+                        || format!("more than {MAX_SEEDS_NEEDED} seeds would be needed"),
+                        |n| format!("about {n} seeds would resolve a slope of this size")
+                    )
                 ));
                 continue;
             }
@@ -417,6 +485,19 @@ pub struct SpeedSlope {
     pub mean: f64,
     pub ci95: f64,
     pub n: usize,
+}
+
+impl SpeedSlope {
+    /// The seeds whose 95 % CI, at the spread these show (sd = ci95 sqrt(n) / t95(n-1)),
+    /// would exclude 0 at this mean: None below 2 seeds, at a zero mean or beyond
+    /// [`MAX_SEEDS_NEEDED`].
+    pub fn seeds_to_resolve(&self) -> Option<usize> {
+        if self.n < 2 || !self.ci95.is_finite() || self.mean == 0.0 {
+            return None;
+        }
+        let sd = self.ci95 * (self.n as f64).sqrt() / t95(self.n - 1);
+        (2..=MAX_SEEDS_NEEDED).find(|&k| t95(k - 1) * sd / (k as f64).sqrt() < self.mean.abs())
+    }
 }
 
 /// The speed slope of one point's stages (`by_stage`: one point per stage, faster or slower):
@@ -771,12 +852,58 @@ mod tests {
         assert_eq!(c[0].verdict, ClaimVerdict::NotResolved, "{}", c[0].evidence);
         assert_eq!(c[1].verdict, ClaimVerdict::NotResolved, "{}", c[1].evidence);
         assert_eq!(c[2].verdict, ClaimVerdict::NotResolved, "{}", c[2].evidence);
-        // a slope without a CI is not printed as a number (it was "+0.0224 ± inf")
+        // a slope or a CI without a number is not printed as one (it was "+0.0224 ± inf",
+        // "CIs inf/inf")
+        for k in 0..3 {
+            assert!(
+                !c[k].evidence.contains("inf") && c[k].evidence.contains("one seed"),
+                "{}",
+                c[k].evidence
+            );
+        }
+    }
+
+    /// With 2 seeds an unresolved comparison says how many seeds its spread needs: two points
+    /// 0.05 apart with per-seed sd 0.0141 each resolve at n = 4 (t95(3) 0.0283 / 2 = 0.045 <
+    /// 0.05; n = 3 gives 0.070).
+    #[test]
+    fn an_unresolved_claim_says_how_many_seeds_would_resolve_it() {
+        let point = |mu_r: f64, mus: [f64; 2]| Point {
+            code: Code::Native,
+            mu_r,
+            eta_r: 0.0,
+            stage: 0,
+            speed: 0.01,
+            mu: (mus[0] + mus[1]) / 2.0,
+            mu_ci95: mean_ci95(&mus).1,
+            seeds: 2,
+            erot: 0.0,
+            dashpot_stable: true,
+            stability_s: 0.0,
+            source: String::new(),
+            per_seed_mu: vec![(1, mus[0]), (2, mus[1])],
+        };
+        let (a, b) = (point(0.0, [0.50, 0.52]), point(1.0, [0.55, 0.57]));
+        assert_eq!(seeds_to_resolve(&a, &b), Some(4));
+        let c = conclusions(&[a.clone(), b], Code::Native);
+        assert_eq!(c[0].verdict, ClaimVerdict::NotResolved, "{}", c[0].evidence);
         assert!(
-            !c[2].evidence.contains("inf") && c[2].evidence.contains("one seed"),
+            c[0].evidence
+                .contains("about 4 seeds per point would resolve it"),
             "{}",
-            c[2].evidence
+            c[0].evidence
         );
+        // equal means: no number of seeds resolves a zero difference
+        assert_eq!(seeds_to_resolve(&a, &a), None);
+        // a slope +0.01 ± 0.02 over 3 seeds: sd = 0.02 sqrt(3) / 4.303 = 0.00805, resolved
+        // where t95(n-1) 0.00805 / sqrt(n) < 0.01: n = 5 (2.776 x 0.00360 = 0.009996; n = 4
+        // gives 0.0128)
+        let sl = SpeedSlope {
+            mean: 0.01,
+            ci95: 0.02,
+            n: 3,
+        };
+        assert_eq!(sl.seeds_to_resolve(), Some(5));
     }
 
     /// The paper protocol's points: (0, 0) but no (0, 0.5). Claim 2 takes the eta_r = 0 run as
