@@ -22,6 +22,9 @@ pub struct Point {
     pub mu: f64,
     /// 95 % CI half-width over seeds (infinite with one seed).
     pub mu_ci95: f64,
+    /// With one seed, the 95 % CI of the run's own window (block means, `compare::block_ci95`):
+    /// how steady that one run's mu is, not how another sample would differ. NaN otherwise.
+    pub run_ci95: f64,
     pub seeds: usize,
     pub erot: f64,
     pub dashpot_stable: bool,
@@ -56,7 +59,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
             .iter()
             .filter(|r| r.run.mu_r == mu_r && r.run.eta_r == eta_r && r.stages.len() > k)
             .collect();
-        let vals: Vec<(f64, f64, u64)> = runs
+        let vals: Vec<(f64, f64, u64, f64)> = runs
             .iter()
             .filter_map(|r| {
                 let st = &r.stages[k];
@@ -65,7 +68,7 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
                 } else {
                     &st.liggghts
                 };
-                c.as_ref().map(|c| (c.mu, c.erot, r.run.seed))
+                c.as_ref().map(|c| (c.mu, c.erot, r.run.seed, c.mu_ci95))
             })
             .collect();
         let mus: Vec<f64> = vals.iter().map(|v| v.0).collect();
@@ -78,6 +81,10 @@ pub fn aggregate(results: &[RunResult]) -> Vec<Point> {
             speed: runs[0].stages[k].speed,
             mu,
             mu_ci95: ci,
+            run_ci95: match vals.as_slice() {
+                [one] => one.3,
+                _ => f64::NAN,
+            },
             seeds: mus.len(),
             erot: vals.iter().map(|v| v.1).sum::<f64>() / vals.len() as f64,
             dashpot_stable: runs.iter().all(|r| r.dashpot_stable),
@@ -170,6 +177,23 @@ fn ci(p: &Point) -> f64 {
         f64::INFINITY
     } else {
         p.mu_ci95
+    }
+}
+
+impl Point {
+    /// Its mu for tables: "0.6318 ± 0.0312" over seeds; with one seed "0.6318 (one seed;
+    /// within the run ± 0.0099)" (no CI over samples exists, and "± inf" is not a number).
+    pub fn mu_words(&self) -> String {
+        if self.mu_ci95.is_finite() {
+            format!("{:.4} ± {:.4}", self.mu, self.mu_ci95)
+        } else if self.run_ci95.is_finite() {
+            format!(
+                "{:.4} (one seed; within the run ± {:.4})",
+                self.mu, self.run_ci95
+            )
+        } else {
+            format!("{:.4} (one seed, no CI)", self.mu)
+        }
     }
 }
 
@@ -824,6 +848,7 @@ mod tests {
             speed,
             mu: 0.0,
             mu_ci95: 0.0,
+            run_ci95: f64::NAN,
             seeds: mus.len(),
             erot: 0.0,
             dashpot_stable: true,
@@ -848,7 +873,13 @@ mod tests {
             .into_iter()
             .filter(|r| r.run.seed == 1)
             .collect();
-        let c = conclusions(&aggregate(&one), Code::Native);
+        let points = aggregate(&one);
+        // a table shows one seed's mu with its run's own CI, never "± inf"
+        assert_eq!(
+            points[0].mu_words(),
+            format!("{:.4} (one seed; within the run ± 0.0100)", points[0].mu)
+        );
+        let c = conclusions(&points, Code::Native);
         assert_eq!(c[0].verdict, ClaimVerdict::NotResolved, "{}", c[0].evidence);
         assert_eq!(c[1].verdict, ClaimVerdict::NotResolved, "{}", c[1].evidence);
         assert_eq!(c[2].verdict, ClaimVerdict::NotResolved, "{}", c[2].evidence);
@@ -876,6 +907,7 @@ mod tests {
             speed: 0.01,
             mu: (mus[0] + mus[1]) / 2.0,
             mu_ci95: mean_ci95(&mus).1,
+            run_ci95: f64::NAN,
             seeds: 2,
             erot: 0.0,
             dashpot_stable: true,

@@ -119,6 +119,10 @@ fn converged_points(dir: &Path) -> Result<Vec<Point>> {
         } else {
             f64::INFINITY
         },
+        run_ci95: match finest.steady.per_seed_mu.len() {
+            1 => finest.steady.mu_ci95,
+            _ => f64::NAN,
+        },
         seeds: finest.steady.per_seed_mu.len(),
         erot: finest.steady.erot,
         dashpot_stable: finest.stability.stable,
@@ -202,7 +206,7 @@ fn judge(points: &[Point], stand_ins: &[Point]) -> Vec<JudgedPoint> {
                 .chain(other_code)
                 .map(|q| {
                     format!(
-                        "{} {}{} ({:.4} ± {:.4})",
+                        "{} {}{} ({})",
                         if within_cis(c.mu, c.mu_ci95, q.mu, q.mu_ci95) {
                             "agrees with"
                         } else {
@@ -214,8 +218,7 @@ fn judge(points: &[Point], stand_ins: &[Point]) -> Vec<JudgedPoint> {
                             format!("{} ", q.code)
                         },
                         q.source,
-                        q.mu,
-                        q.mu_ci95
+                        q.mu_words()
                     )
                 })
                 .collect();
@@ -948,7 +951,7 @@ fn points_table(page: &mut Page, j: &Judgement) {
             });
             let conv = judged
                 .and_then(|j| j.point.as_ref())
-                .map(|q| format!("{:.4} ± {:.4}", q.mu, q.mu_ci95))
+                .map(Point::mu_words)
                 .unwrap_or("–".into());
             let note = judged.map(|j| j.note.clone()).unwrap_or_default();
             vec![
@@ -956,7 +959,7 @@ fn points_table(page: &mut Page, j: &Judgement) {
                 (format!("{}", p.speed), "num"),
                 (format!("{}", p.mu_r), "num"),
                 (format!("{}", p.eta_r), "num"),
-                (format!("{:.4} ± {:.4}", p.mu, p.mu_ci95), "num"),
+                (p.mu_words(), "num"),
                 (p.seeds.to_string(), "num"),
                 (format!("{:.2e}", p.erot), "num"),
                 (
@@ -998,6 +1001,7 @@ mod tests {
             speed: 0.02,
             mu,
             mu_ci95: 0.01,
+            run_ci95: f64::NAN,
             seeds: 3,
             erot: 0.0,
             dashpot_stable: stable,
