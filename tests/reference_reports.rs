@@ -78,6 +78,40 @@ fn every_stored_page_is_made_again_by_this_version() {
     let page = std::fs::read_to_string(root.join("nightly/20261202-e1/report.html")).unwrap();
     assert!(!page.contains("75.11") && page.contains("normal stress off by 0.02 %"));
     assert!(page.contains("judged again") && page.contains("90 % CI [-0.0316, +0.0029]"));
+    // a page says "where we differ" exactly where its numbers decided a difference (not
+    // resolved or not assessable is none); the fast map on stable numbers disagrees with claim 2
+    let mut differing = 0;
+    for group in ["sweep", "paper-protocol"] {
+        for e in std::fs::read_dir(root.join(group)).unwrap() {
+            let dir = e.unwrap().path();
+            if !dir.join("report.html").is_file() {
+                continue;
+            }
+            let rep: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap())
+                    .unwrap();
+            // this study's own verdicts (a study beside it is not where it differs)
+            let decided = ["conclusions", "converged_conclusions"].iter().any(|k| {
+                rep[k].as_array().into_iter().flatten().any(|set| {
+                    set[1].as_array().unwrap().iter().any(|c| {
+                        matches!(c["verdict"].as_str(), Some("disagrees" | "partly agrees"))
+                    })
+                })
+            });
+            let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+            assert_eq!(
+                page.contains("Where we differ"),
+                decided,
+                "{}",
+                dir.display()
+            );
+            differing += usize::from(decided);
+        }
+    }
+    assert!(
+        differing >= 2,
+        "the fast map and the speed studies differ somewhere"
+    );
     assert_eq!(
         std::fs::read(&night).unwrap(),
         evidence,

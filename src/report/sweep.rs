@@ -647,7 +647,14 @@ fn conclusions_section(page: &mut Page, j: &Judgement) {
                 &["paper's claim", "our result", "evidence"],
                 &text_rows(rows),
             ));
-            for c in cs.iter().filter(|c| c.verdict != ClaimVerdict::Agrees) {
+            // a difference only where the numbers decided one (not resolved or not
+            // assessable is no difference: the table says what it lacks)
+            for c in cs.iter().filter(|c| {
+                matches!(
+                    c.verdict,
+                    ClaimVerdict::Disagrees | ClaimVerdict::PartlyAgrees
+                )
+            }) {
                 page.para(&format!(
                     "Where we differ from the paper ({code}, {title}): \"{}\" {} — {}.",
                     c.claim, c.verdict, c.evidence
