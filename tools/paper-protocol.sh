@@ -48,8 +48,12 @@ if [ "${QUEUE:-}" ]; then
   exit 0
 fi
 cp -n "$repo"/studies/paper-protocol-*.toml studies/
-# alive: a process that exists and is not a zombie (an exited queue nobody reaped yet)
-alive() { [ -n "$(ps -o stat= -p "$1" 2>/dev/null | grep -v '^Z')" ]; }
+# alive: the queue (or a run it started) exists and is not a zombie (an exited queue nobody
+# reaped yet); a pid of a session gone may belong to another process by now: its command
+# must be the queue's or a study's
+alive() {
+  ps -o stat=,args= -p "$1" 2>/dev/null | grep -v '^Z' | grep -q 'queue\.sh\|verify run studies/'
+}
 for s in epsd implicit; do
   if [ -f "pid-$s" ] && alive "$(cat "pid-$s")"; then
     echo "$s: running (pid $(cat "pid-$s"))"
