@@ -293,9 +293,132 @@ pub fn convert_liggghts_snapshots(
     Ok(n)
 }
 
+/// The particle positions of a snapshot [`write_snapshot`] wrote, in id order. Nothing in
+/// it is trusted: the header must be this module's (little endian, UInt64 block headers,
+/// appended raw data), the `id` and `Points` arrays must lie inside the file with the lengths
+/// `NumberOfPoints` gives, the ids must be 1..=n in order and every coordinate finite.
+pub fn read_positions(path: &Path) -> Result<Vec<[f64; 3]>> {
+    let b = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bad = |why: &str| {
+        Error::invalid(
+            "snapshot",
+            path.display(),
+            format!("a particle snapshot written by verify ({why})"),
+        )
+    };
+    if !b.ends_with(b"\n</AppendedData>\n</VTKFile>\n") {
+        return Err(bad("it does not end as one does: cut short?"));
+    }
+    let marker = b"<AppendedData encoding=\"raw\">\n_";
+    let start = b
+        .windows(marker.len())
+        .position(|w| w == marker)
+        .ok_or_else(|| bad("no appended raw data"))?;
+    let head = std::str::from_utf8(&b[..start]).map_err(|_| bad("its header is not text"))?;
+    if !head.contains(r#"byte_order="LittleEndian" header_type="UInt64""#) {
+        return Err(bad("not little endian with UInt64 block headers"));
+    }
+    let data = &b[start + marker.len()..];
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let i = tag.find(&format!("{name}=\""))? + name.len() + 2;
+        Some(tag[i..].split('"').next()?.to_string())
+    };
+    let n: usize = head
+        .split("<Piece ")
+        .nth(1)
+        .and_then(|t| attr(t, "NumberOfPoints"))
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| bad("no NumberOfPoints"))?;
+    // the block of the array `name` of type `ty` with `comps` components: n * comps values
+    let block = |name: &str, ty: &str, comps: usize| -> Result<&[u8]> {
+        let tag = head
+            .split("<DataArray ")
+            .find(|t| attr(t, "Name").as_deref() == Some(name))
+            .ok_or_else(|| bad(&format!("no array {name}")))?;
+        let ok = attr(tag, "type").as_deref() == Some(ty)
+            && attr(tag, "NumberOfComponents").as_deref() == Some(&comps.to_string())
+            && attr(tag, "format").as_deref() == Some("appended");
+        let off: usize = attr(tag, "offset")
+            .and_then(|v| v.parse().ok())
+            .filter(|_| ok)
+            .ok_or_else(|| bad(&format!("array {name} is not {comps} x {ty}, appended")))?;
+        let len = n * comps * 8;
+        let size = data
+            .get(off..off + 8)
+            .map(|h| u64::from_le_bytes(h.try_into().expect("8 bytes")));
+        if size != Some(len as u64) {
+            return Err(bad(&format!("array {name}'s block is not {len} bytes")));
+        }
+        data.get(off + 8..off + 8 + len)
+            .ok_or_else(|| bad(&format!("array {name} runs past the end")))
+    };
+    let words = |bytes: &[u8]| -> Vec<[u8; 8]> {
+        bytes
+            .chunks_exact(8)
+            .map(|c| c.try_into().expect("8 bytes"))
+            .collect()
+    };
+    let ids = words(block("id", "Int64", 1)?);
+    if ids
+        .iter()
+        .enumerate()
+        .any(|(k, w)| i64::from_le_bytes(*w) != k as i64 + 1)
+    {
+        return Err(bad("its ids are not 1..=n in order"));
+    }
+    let coords: Vec<f64> = words(block("Points", "Float64", 3)?)
+        .into_iter()
+        .map(f64::from_le_bytes)
+        .collect();
+    if coords.iter().any(|v| !v.is_finite()) {
+        return Err(bad("a position is not finite"));
+    }
+    Ok(coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What [`write_snapshot`] wrote, [`read_positions`] reads back bit for bit; a file cut
+    /// short, an id out of order or a foreign file is an error naming the snapshot.
+    #[test]
+    fn positions_read_back_and_bad_files_are_refused() {
+        let tri = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        let x = vec![[0.1, 1.0, 2.0], [3.0, -4.5, 5.0e-300], [7.0, 8.0, 9.0]];
+        let s = Snapshot {
+            step: 7,
+            x: x.clone(),
+            v: vec![[0.0; 3]; 3],
+            omega: vec![[0.0; 3]; 3],
+            radius: vec![0.1; 3],
+            rotation: vec![[0.0; 3]; 3],
+            plates: [vec![tri], vec![tri]],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        write_snapshot(dir.path(), &s, 1e-3).unwrap();
+        let path = dir.path().join("native_000000007.vtu");
+        assert_eq!(read_positions(&path).unwrap(), x);
+        let good = std::fs::read(&path).unwrap();
+        let refused = |bytes: &[u8]| {
+            std::fs::write(&path, bytes).unwrap();
+            let e = read_positions(&path).unwrap_err().to_string();
+            assert!(
+                e.contains("snapshot") && e.contains("native_000000007.vtu"),
+                "{e}"
+            );
+        };
+        refused(&good[..good.len() - 60]);
+        let mut swapped = good.clone();
+        let one = 1i64.to_le_bytes();
+        let at = swapped.windows(8).position(|w| w == one).unwrap();
+        swapped[at..at + 8].copy_from_slice(&2i64.to_le_bytes());
+        refused(&swapped);
+        refused(b"<VTKFile/>");
+        // the plates' file holds no particles
+        let e = read_positions(&dir.path().join("native_plates_000000007.vtu")).unwrap_err();
+        assert!(e.to_string().contains("no array id"), "{e}");
+    }
 
     #[test]
     fn snapshot_files_hold_binary_arrays_and_the_collection_the_time() {

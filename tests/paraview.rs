@@ -119,3 +119,58 @@ fn snapshots_load_in_vtk_with_their_fields_count_and_time() {
         }
     }
 }
+
+/// `verify profile` on a native ci run with snapshots in its steady window: the profile from
+/// grain displacements is written, the toothed plates grip (slip well under the plate speed)
+/// and the gouge shears (the bottom layer faster than the top one); a snapshot cut short is
+/// an error naming it, not a profile.
+#[test]
+fn displacement_profile_from_the_snapshots_of_a_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let o = common::short_ci_shear(&out, &["--native-only", "--snapshot-every", "250"]);
+    assert!(
+        matches!(o.status.code(), Some(0) | Some(1) | Some(3)),
+        "{}",
+        text(&o)
+    );
+    let seed = out.join("seed1");
+    let o = common::verify(&["profile", seed.to_str().unwrap()]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    let profiles: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(seed.join("native_displacement_profile.json")).unwrap(),
+    )
+    .unwrap();
+    let p = &profiles[0];
+    let layers = p["layers"].as_array().unwrap();
+    let u = |k: usize| layers[k]["u"].as_f64().unwrap();
+    assert!(p["samples"].as_u64().unwrap() >= 5, "{p}");
+    assert!(u(0) > u(layers.len() - 1) + 0.3, "the gouge shears: {p}");
+    for side in ["slip_bottom", "slip_top"] {
+        let s = p[side].as_f64().unwrap();
+        assert!(s.abs() < 0.3, "{side} {s}: the teeth grip ({p})");
+    }
+    assert!(seed.join("displacement_profile.svg").is_file());
+    assert!(t.contains("slip bottom") && t.contains("band width"), "{t}");
+    // a snapshot cut short
+    let vtk = seed.join("vtk");
+    let victim = std::fs::read_dir(&vtk)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            let n = p.file_name().unwrap().to_string_lossy().into_owned();
+            n.starts_with("native_0") && n.ends_with(".vtu")
+        })
+        .max()
+        .unwrap();
+    let bytes = std::fs::read(&victim).unwrap();
+    std::fs::write(&victim, &bytes[..bytes.len() / 2]).unwrap();
+    let o = common::verify(&["profile", seed.to_str().unwrap()]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(
+        t.contains(victim.file_name().unwrap().to_str().unwrap()) && t.contains("cut short"),
+        "{t}"
+    );
+}

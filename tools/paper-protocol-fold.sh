@@ -5,8 +5,9 @@
 # because the installed binary (cd821d5) writes none; with it this version reads the stored
 # results), summary.json and figures; per seed its case, velocity profiles, run records
 # (<code>_run.json), rotation map and series (<code>.csv.gz: gzip -n, checked against the
-# SHA-256 its run record holds before it is kept); per convergence study its summary, page and
-# figures. Never checkpoints, restart files or ParaView snapshots. A run folded before is
+# SHA-256 its run record holds before it is kept), its steady profiles from the grains'
+# displacements between snapshots (`verify profile`, where snapshots are there); per
+# convergence study its summary, page and figures. Never checkpoints, restart files or ParaView snapshots. A run folded before is
 # checked again (its series' SHA-256), not copied twice. Then every page under reference/ is
 # made again by this clone's binary (tools/rerender-reference.sh: the paper protocol's pages
 # with the implicit runs as stand-ins and the fast preset's speed study beside them).
@@ -58,7 +59,14 @@ fold_seed() { # SEED-DIR DEST
       [ -f "$seed/$f" ] && cp "$seed/$f" "$dest/"
     done
   done
-  for f in case.toml rotation_map.svg; do
+  # the steady profiles from the grains' displacements between snapshots (`verify profile`:
+  # slip and band width resolved at the paper's speeds, where velocity samples are not)
+  if [ -d "$seed/vtk" ] && [ -f "$seed/native.csv" ]; then
+    "$verify" profile "$seed" > "$seed/profile.log" 2>&1 \
+      || { cat "$seed/profile.log" >&2; exit 1; }
+  fi
+  for f in case.toml rotation_map.svg native_displacement_profile.csv \
+    native_displacement_profile.json displacement_profile.svg; do
     [ -f "$seed/$f" ] && cp "$seed/$f" "$dest/"
   done
   return 0

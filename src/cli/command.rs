@@ -87,6 +87,16 @@ pub enum Command {
         verify chung-ooi --case chung_ooi_4       # the oblique impacts only\n\n\
         Exit status: 0 every figure within its tolerance and the codes agree, 1 otherwise, 2 error.")]
     ChungOoi(chung_ooi::ChungOoiArgs),
+    /// The steady velocity profile of a finished native run from its ParaView snapshots: each
+    /// grain's displacement between snapshots over each stage's steady window (x unwrapped
+    /// across the periodic side), layers, slip at both plates and band width with 95 % CIs over
+    /// 10 blocks, where 20 velocity samples cannot resolve them (at the paper's speeds a
+    /// grain's velocity fluctuates 20-40 times the plate's).
+    #[command(after_help = "Examples:\n  \
+        verify profile runs/shear-x/seed1      # writes native_displacement_profile.{csv,json}, displacement_profile.svg\n\n\
+        DIR holds case.toml, native.csv and vtk/native_*.vtu (a run with snapshots). \
+        Exit status: 0 written, 2 error.")]
+    Profile { dir: PathBuf },
     /// Write the LIGGGHTS decks of every built-in contact case (default: ./liggghts_inputs).
     Decks {
         #[arg(long, default_value = "liggghts_inputs")]

@@ -36,6 +36,31 @@ pub fn run(cli: Cli) -> Result<Verdict> {
         Command::Sweep(a) => sweep::sweep(a),
         Command::Convergence(a) => convergence::convergence(a),
         Command::Run(a) => study::run_study(a, execute),
+        Command::Profile { dir } => {
+            let profiles = crate::run::displacement::run(&dir)?;
+            crate::report::shear::displacement_plot(
+                &dir.join("displacement_profile.svg"),
+                &profiles,
+            )?;
+            for p in &profiles {
+                println!(
+                    "stage {} ({} m/s): slip bottom {:+.4} ± {:.4}, top {:+.4} ± {:.4}, band width {:.3} mm ({} snapshots)",
+                    p.stage + 1,
+                    p.speed,
+                    p.slip_bottom,
+                    p.slip_bottom_ci95,
+                    p.slip_top,
+                    p.slip_top_ci95,
+                    p.band_width * 1e3,
+                    p.samples
+                );
+            }
+            println!(
+                "profiles: {}",
+                dir.join("native_displacement_profile.csv").display()
+            );
+            Ok(Verdict::Done)
+        }
         Command::Decks { out } => {
             let n = write_decks(&out)?;
             println!("wrote {n} decks under {}", out.display());

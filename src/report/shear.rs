@@ -149,25 +149,53 @@ pub fn plots(out: &Path, lig: &[Series], nat: &[Series]) -> Result<()> {
 /// normalised height across the gouge, with 95 % CIs as bars (the grains' spread, about 0.5 of
 /// V, is in the CSV and summary.json); `velocity_profile.svg`.
 pub fn profile_plot(out: &Path, lig: &[VelocityProfile], nat: &[VelocityProfile]) -> Result<()> {
-    // (label, colour, (xi, u) per layer, CI per layer)
-    type ProfileCurve = (String, usize, Vec<(f64, f64)>, Vec<f64>);
     let mut data: Vec<ProfileCurve> = Vec::new();
     for (code, color, profiles) in [("LIGGGHTS", 0usize, lig), ("native", 1, nat)] {
         for p in profiles {
-            data.push((
-                format!(
-                    "{code} stage {} ({} m/s): slip {:.0} % / {:.0} %",
-                    p.stage + 1,
-                    p.speed,
-                    100.0 * p.slip_bottom,
-                    100.0 * p.slip_top
-                ),
-                color,
-                p.layers.iter().map(|l| (l.xi, l.u)).collect(),
-                p.layers.iter().map(|l| l.u_ci95).collect(),
-            ));
+            data.push(profile_curve(code, color, p));
         }
     }
+    profiles_figure(
+        &out.join("velocity_profile.svg"),
+        "steady velocity profile across the gouge (bars: 95 % CI)",
+        &data,
+    )
+}
+
+/// The steady profiles of a run from its grains' displacements between snapshots
+/// (`crate::profile::displacement_profile`), one colour per stage: `path`.
+pub fn displacement_plot(path: &Path, profiles: &[VelocityProfile]) -> Result<()> {
+    let data: Vec<ProfileCurve> = profiles
+        .iter()
+        .enumerate()
+        .map(|(k, p)| profile_curve("native", k, p))
+        .collect();
+    profiles_figure(
+        path,
+        "steady profile from grain displacements between snapshots (bars: 95 % CI over blocks)",
+        &data,
+    )
+}
+
+/// (label, colour, (xi, u) per layer, CI per layer)
+type ProfileCurve = (String, usize, Vec<(f64, f64)>, Vec<f64>);
+
+fn profile_curve(code: &str, color: usize, p: &VelocityProfile) -> ProfileCurve {
+    (
+        format!(
+            "{code} stage {} ({} m/s): slip {:.0} % / {:.0} %",
+            p.stage + 1,
+            p.speed,
+            100.0 * p.slip_bottom,
+            100.0 * p.slip_top
+        ),
+        color,
+        p.layers.iter().map(|l| (l.xi, l.u)).collect(),
+        p.layers.iter().map(|l| l.u_ci95).collect(),
+    )
+}
+
+fn profiles_figure(path: &Path, title: &str, data: &[ProfileCurve]) -> Result<()> {
     if data.is_empty() {
         return Ok(());
     }
@@ -180,8 +208,8 @@ pub fn profile_plot(out: &Path, lig: &[VelocityProfile], nat: &[VelocityProfile]
         })
         .collect();
     line_plot(
-        &out.join("velocity_profile.svg"),
-        "steady velocity profile across the gouge (bars: 95 % CI)",
+        path,
+        title,
         "height between the tooth tips (0 bottom plate, 1 top plate)",
         "v_x / bottom plate speed",
         &curves,

@@ -11,6 +11,7 @@ pub mod chung_ooi;
 pub mod contact;
 pub mod convergence;
 pub mod convergence_outcome;
+pub mod displacement;
 pub mod history;
 pub mod limits;
 pub mod nightly;
