@@ -118,6 +118,22 @@ fn every_stored_page_is_made_again_by_this_version() {
         "summary.json kept"
     );
     verdicts_are_as_written(&root);
+    // (last: it makes a page again without its study beside it) the paper protocol's stable
+    // run has its slip from grain displacements on its page; a profile file that is not one
+    // is said there, not skipped
+    let implicit = root.join("paper-protocol/implicit");
+    let page = std::fs::read_to_string(implicit.join("report.html")).unwrap();
+    assert!(page.contains("Slip and shear band, from grain displacements"));
+    let profile = implicit.join("runs/mur1_etar0.5_s1/seed1/native_displacement_profile.json");
+    std::fs::write(&profile, "[{\"stage\": ").unwrap();
+    let o = std::process::Command::new(common::verify_bin())
+        .args(["sweep", "report"])
+        .arg(&implicit)
+        .output()
+        .unwrap();
+    assert!(common::text(&o).contains("report:"), "{}", common::text(&o));
+    let page = std::fs::read_to_string(implicit.join("report.html")).unwrap();
+    assert!(page.contains("Not read: runs/mur1_etar0.5_s1/seed1/native_displacement_profile.json"));
 }
 
 /// The verdicts recomputed from the stored evidence are those written in
