@@ -124,6 +124,12 @@ fn every_stored_page_is_made_again_by_this_version() {
     let implicit = root.join("paper-protocol/implicit");
     let page = std::fs::read_to_string(implicit.join("report.html")).unwrap();
     assert!(page.contains("Slip and shear band, from grain displacements"));
+    // beside the speed study nothing is "the same" while the protocol decides nothing
+    let epsd = std::fs::read_to_string(root.join("paper-protocol/epsd/report.html")).unwrap();
+    assert!(
+        epsd.contains("not decided here yet") && !epsd.contains(">the same<"),
+        "the paper protocol's page beside the speed study"
+    );
     let profile = implicit.join("runs/mur1_etar0.5_s1/seed1/native_displacement_profile.json");
     std::fs::write(&profile, "[{\"stage\": ").unwrap();
     let o = std::process::Command::new(common::verify_bin())

@@ -572,11 +572,13 @@ fn beside_section(page: &mut Page, j: &Judgement, b: &BesideReport) {
                     ClaimVerdict::Agrees | ClaimVerdict::PartlyAgrees | ClaimVerdict::Disagrees
                 )
             };
+            // "the same" only where both decided the same way (two "not resolved" are
+            // not an agreement)
             let same = match (&a, &z) {
-                (Some(a), Some(z)) if a.verdict == z.verdict => ("the same", "pass"),
-                (Some(a), Some(z)) if decided(a) && decided(z) => ("DIFFERENT", "fail"),
                 (Some(a), Some(_)) if !decided(a) => ("not decided here yet", "warn"),
-                (Some(_), Some(_)) => ("not decided beside", "warn"),
+                (Some(_), Some(z)) if !decided(z) => ("not decided beside", "warn"),
+                (Some(a), Some(z)) if a.verdict == z.verdict => ("the same", "pass"),
+                (Some(_), Some(_)) => ("DIFFERENT", "fail"),
                 _ => ("not compared", "warn"),
             };
             rows.push(vec![
