@@ -342,14 +342,21 @@ pub fn read_positions(path: &Path) -> Result<Vec<[f64; 3]>> {
             .and_then(|v| v.parse().ok())
             .filter(|_| ok)
             .ok_or_else(|| bad(&format!("array {name} is not {comps} x {ty}, appended")))?;
-        let len = n * comps * 8;
+        // sizes from the file: checked arithmetic (an absurd count is an error, not a wrap)
+        let len = n
+            .checked_mul(comps * 8)
+            .ok_or_else(|| bad("NumberOfPoints out of range"))?;
+        let (body, end) = off
+            .checked_add(8)
+            .and_then(|b| Some((b, b.checked_add(len)?)))
+            .ok_or_else(|| bad(&format!("array {name}'s offset out of range")))?;
         let size = data
-            .get(off..off + 8)
+            .get(off..body)
             .map(|h| u64::from_le_bytes(h.try_into().expect("8 bytes")));
         if size != Some(len as u64) {
             return Err(bad(&format!("array {name}'s block is not {len} bytes")));
         }
-        data.get(off + 8..off + 8 + len)
+        data.get(body..end)
             .ok_or_else(|| bad(&format!("array {name} runs past the end")))
     };
     let words = |bytes: &[u8]| -> Vec<[u8; 8]> {
@@ -415,6 +422,21 @@ mod tests {
         swapped[at..at + 8].copy_from_slice(&2i64.to_le_bytes());
         refused(&swapped);
         refused(b"<VTKFile/>");
+        // an absurd count or offset is an error, not an overflow (the header edited, the
+        // binary data kept byte for byte)
+        let edited = |from: &str, to: &str| {
+            let at = good
+                .windows(from.len())
+                .position(|w| w == from.as_bytes())
+                .unwrap();
+            [&good[..at], to.as_bytes(), &good[at + from.len()..]].concat()
+        };
+        let max = u64::MAX;
+        refused(&edited(
+            r#"NumberOfPoints="3""#,
+            &format!(r#"NumberOfPoints="{max}""#),
+        ));
+        refused(&edited(r#"offset="0""#, &format!(r#"offset="{max}""#)));
         // the plates' file holds no particles
         let e = read_positions(&dir.path().join("native_plates_000000007.vtu")).unwrap_err();
         assert!(e.to_string().contains("no array id"), "{e}");
