@@ -779,6 +779,13 @@ pub fn seeds_needed(mean: f64, sd: f64, margin: f64) -> Option<usize> {
     } else {
         t95
     };
+    seeds_for(t, sd, gap)
+}
+
+/// The smallest n in 2 ..= [`MAX_SEEDS_NEEDED`] whose CI half-width `t(n - 1) sd / sqrt(n)`
+/// is under `gap`: the one search behind every "about n seeds would decide" (this module's
+/// equivalence test, the sweep's unresolved claims).
+pub fn seeds_for(t: fn(usize) -> f64, sd: f64, gap: f64) -> Option<usize> {
     (2..=MAX_SEEDS_NEEDED).find(|&n| t(n - 1) * sd / (n as f64).sqrt() < gap)
 }
 

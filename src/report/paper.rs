@@ -2,7 +2,7 @@
 //! 2022): steady mu against mu_r per eta_r and speed (their Figs 5-7), mu against shear speed
 //! (Figs 12-15), a heat map over (mu_r, eta_r), and the three conclusions checked in numbers.
 
-use crate::compare::{mean_ci95, t95, within_cis, MAX_SEEDS_NEEDED};
+use crate::compare::{mean_ci95, seeds_for, t95, within_cis, MAX_SEEDS_NEEDED};
 use crate::error::draw_err;
 use crate::error::Result;
 use crate::run::sweep::RunResult;
@@ -228,7 +228,7 @@ pub fn seeds_to_resolve(a: &Point, b: &Point) -> Option<usize> {
     if !(sa.is_finite() && sb.is_finite() && gap > 0.0) {
         return None;
     }
-    (2..=MAX_SEEDS_NEEDED).find(|&n| t95(n - 1) * (sa + sb) / (n as f64).sqrt() < gap)
+    seeds_for(t95, sa + sb, gap)
 }
 
 /// What an unresolved comparison of two points needs: the seeds that would resolve it, or
@@ -520,7 +520,7 @@ impl SpeedSlope {
             return None;
         }
         let sd = self.ci95 * (self.n as f64).sqrt() / t95(self.n - 1);
-        (2..=MAX_SEEDS_NEEDED).find(|&k| t95(k - 1) * sd / (k as f64).sqrt() < self.mean.abs())
+        seeds_for(t95, sd, self.mean.abs())
     }
 }
 
