@@ -336,11 +336,30 @@ pub fn lockstep(a: &Series, b: &Series, channels: &[&str], rtol: f64) -> Horizon
 /// Two-sided 95 % Student t quantile for `dof` degrees of freedom (statrs' inverse CDF at
 /// 0.975; infinite for 0 degrees of freedom).
 pub fn t95(dof: usize) -> f64 {
+    t_two_sided(0.05, dof)
+}
+
+/// The Student t quantile whose two-sided tails hold `alpha` together (inverse CDF at
+/// 1 - alpha / 2, statrs), for `dof` degrees of freedom; infinite for 0 degrees of freedom or
+/// an `alpha` outside (0, 1). Remembered per (alpha, dof): statrs inverts the CDF by iteration,
+/// and the claim tests' error rates ask for the same few quantiles a million times.
+pub fn t_two_sided(alpha: f64, dof: usize) -> f64 {
     use statrs::distribution::{ContinuousCDF, StudentsT};
-    match StudentsT::new(0.0, 1.0, dof as f64) {
-        Ok(t) if dof > 0 => t.inverse_cdf(0.975),
-        _ => f64::INFINITY,
+    use std::sync::Mutex;
+    static KNOWN: Mutex<Vec<(u64, usize, f64)>> = Mutex::new(Vec::new());
+    let key = (alpha.to_bits(), dof);
+    let mut known = KNOWN.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(&(_, _, t)) = known.iter().find(|k| (k.0, k.1) == key) {
+        return t;
     }
+    let t = match StudentsT::new(0.0, 1.0, dof as f64) {
+        Ok(t) if dof > 0 && alpha > 0.0 && alpha < 1.0 => t.inverse_cdf(1.0 - 0.5 * alpha),
+        _ => f64::INFINITY,
+    };
+    if known.len() < 4096 {
+        known.push((key.0, key.1, t));
+    }
+    t
 }
 
 /// The crate's agreement rule for two estimates with 95 % confidence half-widths: they agree
@@ -706,11 +725,7 @@ impl Outcome {
 /// One-sided 95 % Student t quantile (the two-sided 90 % one) for `dof` degrees of freedom;
 /// infinite for 0.
 pub fn t95_one_sided(dof: usize) -> f64 {
-    use statrs::distribution::{ContinuousCDF, StudentsT};
-    match StudentsT::new(0.0, 1.0, dof as f64) {
-        Ok(t) if dof > 0 => t.inverse_cdf(0.95),
-        _ => f64::INFINITY,
-    }
+    t_two_sided(0.10, dof)
 }
 
 /// Most seeds [`seeds_needed`] looks for.
@@ -785,7 +800,7 @@ pub fn seeds_needed(mean: f64, sd: f64, margin: f64) -> Option<usize> {
 /// The smallest n in 2 ..= [`MAX_SEEDS_NEEDED`] whose CI half-width `t(n - 1) sd / sqrt(n)`
 /// is under `gap`: the one search behind every "about n seeds would decide" (this module's
 /// equivalence test, the sweep's unresolved claims).
-pub fn seeds_for(t: fn(usize) -> f64, sd: f64, gap: f64) -> Option<usize> {
+pub fn seeds_for(t: impl Fn(usize) -> f64, sd: f64, gap: f64) -> Option<usize> {
     (2..=MAX_SEEDS_NEEDED).find(|&n| t(n - 1) * sd / (n as f64).sqrt() < gap)
 }
 

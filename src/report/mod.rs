@@ -1,6 +1,7 @@
 //! Verdicts to people: terminal tables, SVG plots, HTML pages, VTK snapshots.
 
 pub mod bars;
+pub mod claim_rates;
 pub mod contact;
 pub mod convergence;
 pub mod html;
