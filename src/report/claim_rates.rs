@@ -20,7 +20,7 @@
 use crate::calibration::SplitMix;
 use crate::compare::mean_ci95;
 use crate::report::paper::{
-    combine, falls, rises, speed_effect, speed_slope, ClaimVerdict, Point, Verdict,
+    combine, common_seeds, falls, rises, speed_effect, speed_slope, ClaimVerdict, Point, Verdict,
 };
 use crate::run::Code;
 use serde::Serialize;
@@ -114,16 +114,7 @@ fn pool_and_shape(points: &[Point], code: Code) -> Option<(Vec<Unit>, Shape)> {
         }
         complete += 1;
         // the seeds run at every stage
-        let seeds: Vec<u64> = by_stage[0]
-            .per_seed_mu
-            .iter()
-            .map(|s| s.0)
-            .filter(|s| {
-                by_stage
-                    .iter()
-                    .all(|p| p.per_seed_mu.iter().any(|q| q.0 == *s))
-            })
-            .collect();
+        let seeds = common_seeds(&by_stage);
         let n = seeds.len();
         if n < 2 {
             continue;

@@ -582,6 +582,23 @@ pub(crate) fn speed_effect(sl: &SpeedSlope, tested: usize) -> bool {
     half.is_finite() && sl.mean.abs() > half
 }
 
+/// The seeds present at every one of a point's stages, in the first stage's order.
+pub(crate) fn common_seeds(by_stage: &[&Point]) -> Vec<u64> {
+    let Some(first) = by_stage.first() else {
+        return Vec::new();
+    };
+    first
+        .per_seed_mu
+        .iter()
+        .map(|s| s.0)
+        .filter(|s| {
+            by_stage
+                .iter()
+                .all(|p| p.per_seed_mu.iter().any(|q| q.0 == *s))
+        })
+        .collect()
+}
+
 /// The speed slope of one point's stages (`by_stage`: one point per stage, faster or slower):
 /// one slope per seed present in every stage; None without such a seed or 2 distinct speeds.
 pub fn speed_slope(by_stage: &[&Point]) -> Option<SpeedSlope> {
@@ -591,17 +608,7 @@ pub fn speed_slope(by_stage: &[&Point]) -> Option<SpeedSlope> {
     if sxx.is_nan() || sxx <= 0.0 {
         return None;
     }
-    let seeds: Vec<u64> = by_stage
-        .first()?
-        .per_seed_mu
-        .iter()
-        .map(|s| s.0)
-        .filter(|s| {
-            by_stage
-                .iter()
-                .all(|p| p.per_seed_mu.iter().any(|q| q.0 == *s))
-        })
-        .collect();
+    let seeds = common_seeds(by_stage);
     let slopes: Vec<f64> = seeds
         .iter()
         .map(|s| {
