@@ -57,8 +57,9 @@ pub struct TestRates {
     /// quantiles are built for.
     pub normal: Rates,
     /// The pool's runs resampled: the study's own scatter, tails and all, but only as many
-    /// distinct runs as the pool holds (with 15-30 runs the rate of a rare false alarm moves by
-    /// a factor of 2-10 from one pool to another: measured, tests below).
+    /// distinct runs as the pool holds: a rare false alarm's rate then depends on the pool
+    /// (measured 2026-12-06 on two normal pools of 30 runs, 3 seeds, the slope test at each
+    /// point: 2.2 % and 0.15 % where the t quantile promises 0.5 %).
     pub resampled: Rates,
     pub draws: usize,
 }

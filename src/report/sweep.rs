@@ -506,8 +506,9 @@ fn error_rates(page: &mut Page, rates: &[(Code, Vec<TestRates>)]) {
     for (code, rs) in rates {
         if rs.is_empty() {
             page.para(&format!(
-                "{code}: no point has 2 seeds, so no test resolves anything (none errs) and \
-                 there is no scatter to measure the tests with: 2 seeds give both."
+                "{code}: no error rates: no point has 2 seeds (then no test resolves \
+                 anything, so none errs) or too few runs to estimate the seeds' scatter from; \
+                 2 or more seeds at the points give both."
             ));
         }
         for r in rs {
