@@ -331,7 +331,7 @@ fn claim2(shape: &Shape, d: &mut Draw, fall: f64) -> ClaimVerdict {
             .collect();
         for s in 0..shape.speeds.len() {
             let c: Vec<&Point> = curve.iter().map(|p| &p[s]).collect();
-            v.push(falls(&c));
+            v.push(falls(&c).0);
         }
     }
     combine(&v)

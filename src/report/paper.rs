@@ -259,14 +259,17 @@ pub(crate) fn rises(first: &Point, last: &Point) -> Verdict {
 /// Claim 2 on one eta_r > 0 curve (mu_r increasing, its mu_r = 0 end included): Agree when it
 /// has a critical mu_r ([`critical_mu_r`]), Disagree when instead mu at the largest mu_r is
 /// above mu at the smallest by more than the two CIs, else Unresolved.
-pub(crate) fn falls(c: &[&Point]) -> Verdict {
-    match (critical_mu_r(c), c.first(), c.last()) {
+/// Returns the critical mu_r and mu's fall beyond it with the verdict.
+pub(crate) fn falls(c: &[&Point]) -> (Verdict, Option<(f64, f64)>) {
+    let critical = critical_mu_r(c);
+    let verdict = match (critical, c.first(), c.last()) {
         (Some(_), _, _) => Verdict::Agree,
         (None, Some(first), Some(last)) if rises(first, last) == Verdict::Agree => {
             Verdict::Disagree
         }
         _ => Verdict::Unresolved,
-    }
+    };
+    (verdict, critical)
 }
 
 /// The critical mu_r of one (code, stage, eta_r) curve: the mu_r of the largest mu when mu at
@@ -378,9 +381,9 @@ pub fn conclusions(points: &[Point], code: Code) -> Vec<Conclusion> {
             } else {
                 ""
             };
-            let verdict = falls(&c);
+            let (verdict, critical) = falls(&c);
             verdicts.push(verdict);
-            match critical_mu_r(&c) {
+            match critical {
                 Some((m, drop)) => {
                     criticals.push((s, e, m));
                     ev.push(format!(
@@ -917,11 +920,10 @@ mod tests {
             "{}",
             c[2].evidence
         );
-        let mut alone: Vec<RunResult> = r
+        let alone: Vec<RunResult> = r
             .into_iter()
             .filter(|x| x.run.mu_r == 0.5 && x.run.eta_r == 0.5)
             .collect();
-        noisy(&mut alone);
         let c = conclusions(&aggregate(&alone), Code::Native);
         assert!(
             c[2].evidence.contains("(3 seeds), a speed effect"),
