@@ -153,6 +153,39 @@ fn displacement_profile_from_the_snapshots_of_a_run() {
     }
     assert!(seed.join("displacement_profile.svg").is_file());
     assert!(t.contains("slip bottom") && t.contains("band width"), "{t}");
+    // a stage with no snapshots in its steady window (as a run resumed on another machine
+    // from a carried checkpoint has for the stages before it): no profile for it, said, and
+    // the others' still made
+    let case_path = seed.join("case.toml");
+    let case = std::fs::read_to_string(&case_path).unwrap();
+    let speed = case
+        .split("[[stages]]")
+        .nth(1)
+        .and_then(|st| st.lines().find_map(|l| l.strip_prefix("speed = ")))
+        .unwrap()
+        .trim()
+        .to_string();
+    std::fs::write(
+        &case_path,
+        format!("{case}\n[[stages]]\nspeed = {speed}\nstrain = 0.05\n"),
+    )
+    .unwrap();
+    let o = common::verify(&["profile", seed.to_str().unwrap()]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(
+        t.contains("stage 2") && t.contains("0 snapshot(s) in its steady window"),
+        "{t}"
+    );
+    let two: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(seed.join("native_displacement_profile.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        two, profiles,
+        "the first stage's profile as before, none for the second"
+    );
+    std::fs::write(&case_path, &case).unwrap();
     // a snapshot cut short
     let vtk = seed.join("vtk");
     let victim = std::fs::read_dir(&vtk)
@@ -173,4 +206,11 @@ fn displacement_profile_from_the_snapshots_of_a_run() {
         t.contains(victim.file_name().unwrap().to_str().unwrap()) && t.contains("cut short"),
         "{t}"
     );
+    // no stage with snapshots enough: an error, nothing written
+    std::fs::remove_dir_all(&vtk).unwrap();
+    std::fs::create_dir(&vtk).unwrap();
+    let o = common::verify(&["profile", seed.to_str().unwrap()]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(2), "{t}");
+    assert!(t.contains("3 or more in a stage's steady window"), "{t}");
 }

@@ -48,6 +48,68 @@ if [ "${QUEUE:-}" ]; then
   exit 0
 fi
 cp -n "$repo"/studies/paper-protocol-*.toml studies/
+# A replaced machine (or a new folder): what this clone holds of the studies comes back before
+# any queue starts, each file checked, so nothing finished is run again and a run part way
+# resumes where it was carried:
+# - a finished run from reference/paper-protocol/<study>/runs/<id> (tools/paper-protocol-fold.sh):
+#   result.json against its record (result.json.sha256), each series gunzipped and checked
+#   against the SHA-256 its run record holds; the folder is put in place whole (renamed);
+# - a run part way from reference/paper-protocol/in-progress/ (tools/paper-protocol-carry.sh):
+#   its checkpoint, gunzipped and checked against its SHA-256, where the run has neither
+#   finished here nor a checkpoint here (one here is newer).
+# Its ParaView snapshots before the carried step are not carried (159 MB per run).
+ref="$repo/reference/paper-protocol"
+sha() { sha256sum "$1" | cut -d' ' -f1; }
+for src in "$ref"/*/runs/*/; do
+  src=${src%/}
+  id=${src##*/}
+  name=$(basename "$(dirname "$(dirname "$src")")")
+  run="runs/paper-protocol-$name/runs/$id"
+  [ -f "$run/result.json" ] && continue
+  read -r _ want < "$src/result.json.sha256"
+  if [ "$(sha "$src/result.json")" != "$want" ]; then
+    echo "error: $src/result.json differs from its record: not restored" >&2
+    exit 1
+  fi
+  rm -rf "$run.restore"
+  mkdir -p "$run.restore" "runs/paper-protocol-$name"
+  cp -r "$src"/. "$run.restore"/
+  rm "$run.restore/result.json.sha256"
+  for gz in "$run.restore"/seed*/*.csv.gz; do
+    csv=${gz%.gz}
+    gzip -dc "$gz" > "$csv" && rm "$gz"
+    want=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["sha256"])' \
+      "${csv%.csv}_run.json")
+    if [ "$(sha "$csv")" != "$want" ]; then
+      echo "error: $gz: SHA-256 differs from its run record's: not restored" >&2
+      exit 1
+    fi
+  done
+  [ -f "runs/paper-protocol-$name/manifest.json" ] || cp "$ref/$name/manifest.json" \
+    "runs/paper-protocol-$name/manifest.json"
+  # a run folder without a result (a run started again here) is kept aside, not deleted
+  [ -d "$run" ] && mv "$run" "$run.set-aside-$(date -u +%Y%m%dT%H%M%S)"
+  mv "$run.restore" "$run"
+  echo "$(date -u +%FT%TZ) restored finished run $name/$id from $src (checked)" | tee -a runs.log
+done
+# carried checkpoints: in-progress/<path under runs/>.gz with <path>.sha256 ("SHA-256 step")
+while IFS= read -r -d '' src; do
+  rel=${src#"$ref/in-progress/"}
+  dest="runs/${rel%.gz}"
+  # a run finished here (its run record) or part way here (a newer checkpoint) keeps its own
+  [ -f "$(dirname "$dest")/native_run.json" ] || [ -f "$dest" ] && continue
+  mkdir -p "$(dirname "$dest")"
+  gzip -dc "$src" > "$dest.tmp"
+  read -r want step < "${src%.gz}.sha256"
+  if [ "$(sha "$dest.tmp")" != "$want" ]; then
+    rm "$dest.tmp"
+    echo "error: $src: SHA-256 differs from its record: not restored" >&2
+    exit 1
+  fi
+  mv "$dest.tmp" "$dest"
+  echo "$(date -u +%FT%TZ) restored checkpoint $dest at step $step from $src (checked)" \
+    | tee -a runs.log
+done < <(find "$ref/in-progress" -name '*.bin.gz' -print0 2>/dev/null)
 # alive: the queue (or a run it started) exists and is not a zombie (an exited queue nobody
 # reaped yet); a pid of a session gone may belong to another process by now: its command
 # must be the queue's or a study's

@@ -46,8 +46,15 @@ fn top_y_at(series: &Series, col: usize, step: u64) -> Option<f64> {
     }
 }
 
+/// A displacement profile needs this many snapshots in its stage's steady window (two
+/// intervals: [`displacement_profile`]'s least).
+const LEAST_SNAPSHOTS: usize = 3;
+
 /// The run's profiles, one per stage, from the snapshots in each stage's steady window
-/// (its second half, as the steady mu's): written to DIR and returned.
+/// (its second half, as the steady mu's): written to DIR and returned. A stage with fewer
+/// than [`LEAST_SNAPSHOTS`] there (a run resumed on another machine from a carried
+/// checkpoint, whose earlier snapshots stayed behind) has none, said on stderr; a run with
+/// none in any stage is an error.
 pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
     let case: ShearCase = toml::from_str(&read_to_string(&dir.join("case.toml"))?)
         .map_err(|e| Error::invalid("case.toml", dir.display(), e.to_string()))?;
@@ -66,10 +73,24 @@ pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
     let mut profiles = Vec::new();
     for k in 0..case.stages.len() {
         let (a, b) = steady_window(ends[k], ends[k + 1]);
-        let samples: Vec<PositionSample> = steps
+        let window: Vec<u64> = steps
             .iter()
-            .filter(|&&s| (a..=b).contains(&s))
-            .map(|&s| {
+            .copied()
+            .filter(|s| (a..=b).contains(s))
+            .collect();
+        if window.len() < LEAST_SNAPSHOTS {
+            eprintln!(
+                "note: stage {} ({} m/s): {} snapshot(s) in its steady window (steps {a}-{b}), \
+                 {LEAST_SNAPSHOTS} needed: no profile for it",
+                k + 1,
+                case.stages[k].speed,
+                window.len()
+            );
+            continue;
+        }
+        let samples: Vec<PositionSample> = window
+            .into_iter()
+            .map(|s| {
                 let top_y = top_y_at(&series, top, s).ok_or_else(|| {
                     Error::invalid(
                         "native.csv",
@@ -91,6 +112,15 @@ pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
             .collect::<Result<_>>()?;
         let refs: Vec<&PositionSample> = samples.iter().collect();
         profiles.push(displacement_profile(&case, k, &refs)?);
+    }
+    if profiles.is_empty() {
+        return Err(Error::Missing {
+            what: format!(
+                "snapshots ({LEAST_SNAPSHOTS} or more in a stage's steady window: {} in all)",
+                steps.len()
+            ),
+            dir: vtk,
+        });
     }
     write_atomic(
         &dir.join("native_displacement_profile.csv"),
