@@ -54,7 +54,7 @@ cp -n "$repo"/studies/paper-protocol-*.toml studies/
 # - a finished run from reference/paper-protocol/<study>/runs/<id> (tools/paper-protocol-fold.sh):
 #   result.json against its record (result.json.sha256), each series gunzipped and checked
 #   against the SHA-256 its run record holds; the folder is put in place whole (renamed);
-# - a run part way from reference/paper-protocol/in-progress/ (tools/paper-protocol-carry.sh):
+# - a run part way from carried/paper-protocol/ (tools/paper-protocol-carry.sh):
 #   its checkpoint, gunzipped and checked against its SHA-256, where the run has neither
 #   finished here nor a checkpoint here (one here is newer).
 # Its ParaView snapshots before the carried step are not carried (159 MB per run).
@@ -92,9 +92,10 @@ for src in "$ref"/*/runs/*/; do
   mv "$run.restore" "$run"
   echo "$(date -u +%FT%TZ) restored finished run $name/$id from $src (checked)" | tee -a runs.log
 done
-# carried checkpoints: in-progress/<path under runs/>.gz with <path>.sha256 ("SHA-256 step")
+# carried checkpoints: carried/paper-protocol/<path under runs/>.gz with <path>.sha256
+# ("SHA-256 step")
 while IFS= read -r -d '' src; do
-  rel=${src#"$ref/in-progress/"}
+  rel=${src#"$repo/carried/paper-protocol/"}
   dest="runs/${rel%.gz}"
   # a run finished here (its run record) or part way here (a newer checkpoint) keeps its own
   [ -f "$(dirname "$dest")/native_run.json" ] || [ -f "$dest" ] && continue
@@ -109,7 +110,7 @@ while IFS= read -r -d '' src; do
   mv "$dest.tmp" "$dest"
   echo "$(date -u +%FT%TZ) restored checkpoint $dest at step $step from $src (checked)" \
     | tee -a runs.log
-done < <(find "$ref/in-progress" -name '*.bin.gz' -print0 2>/dev/null)
+done < <(find "$repo/carried/paper-protocol" -name '*.bin.gz' -print0 2>/dev/null)
 # alive: the queue (or a run it started) exists and is not a zombie (an exited queue nobody
 # reaped yet); a pid of a session gone may belong to another process by now: its command
 # must be the queue's or a study's
