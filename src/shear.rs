@@ -465,6 +465,7 @@ pub fn timed_steps(s: &mut dyn Stepper, t: crate::ranks::Timing) -> Result<Timed
     for _ in 0..t.timed {
         s.step()?;
     }
+    s.settle()?;
     let seconds = t0.elapsed().as_secs_f64();
     let cpu_seconds = c0.zip(process_cpu_seconds()).map(|(a, b)| b - a);
     let rank_phases = s.phases_by_rank();
@@ -591,6 +592,7 @@ pub fn drive<S: Stepper + ?Sized>(
             if !(output || sample || snapshot) {
                 continue;
             }
+            stepper.settle()?;
             let Some(w) = stepper.whole() else {
                 all_done(stepper, Ok(()))?;
                 continue;
@@ -641,10 +643,12 @@ pub fn drive<S: Stepper + ?Sized>(
             drop(w);
             all_done(stepper, done)?;
         }
+        stepper.settle()?;
         if k == 0 {
             run.compacted = stepper.whole().map(|w| w.state(packing));
         }
     }
+    stepper.settle()?;
     let last = stepper.whole().map(|w| w.into_owned());
     last.ok_or_else(|| Error::Solver {
         step: stepper.steps(),

@@ -53,7 +53,7 @@ const LEAST_SNAPSHOTS: usize = 3;
 /// The run's profiles, one per stage, from the snapshots in each stage's steady window
 /// (its second half, as the steady mu's): written to DIR and returned. A stage with fewer
 /// than [`LEAST_SNAPSHOTS`] there (a run resumed on another machine from a carried
-/// checkpoint, whose earlier snapshots stayed behind) has none, said on stderr; a run with
+/// checkpoint, whose earlier snapshots stayed behind) has none, said as a note; a run with
 /// none in any stage is an error.
 pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
     let case: ShearCase = toml::from_str(&read_to_string(&dir.join("case.toml"))?)
@@ -79,13 +79,13 @@ pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
             .filter(|s| (a..=b).contains(s))
             .collect();
         if window.len() < LEAST_SNAPSHOTS {
-            eprintln!(
-                "note: stage {} ({} m/s): {} snapshot(s) in its steady window (steps {a}-{b}), \
+            super::tell::note(&format!(
+                "stage {} ({} m/s): {} snapshot(s) in its steady window (steps {a}-{b}), \
                  {LEAST_SNAPSHOTS} needed: no profile for it",
                 k + 1,
                 case.stages[k].speed,
                 window.len()
-            );
+            ));
             continue;
         }
         let samples: Vec<PositionSample> = window

@@ -15,8 +15,9 @@
 //!   phase times (by construction they give back its time per step);
 //! - `M_b` messages per step, `B_b` bytes per step a brick receives: every step the ghosts'
 //!   positions from the neighbouring bricks (72 bytes per ghost, one message per neighbour)
-//!   and two all-reduces (the skin flag, 8 bytes; the plate forces' exact sum, 208 bytes:
-//!   about log2 R messages each), and a rebuild's messages amortised over the measured steps
+//!   and one all-reduce (the skin flag and the last step's plate forces' exact sum, 216
+//!   bytes: about log2 R messages; two, of 8 and 208 bytes, until 2026-12-06), and a
+//!   rebuild's messages amortised over the measured steps
 //!   between rebuilds: two all-reduces (the divergence check, the check that no particle
 //!   went beyond the neighbouring bricks) and, to each neighbouring brick, the migrants and
 //!   the ghosts (each a message of lengths and one of numbers);
@@ -57,9 +58,13 @@ const REBUILD_ALL_TO_ALL_CALLS: f64 = 4.0;
 
 /// Bytes per ghost sent every step: position, velocity, angular velocity.
 const GHOST_BYTES: f64 = 72.0;
-/// Bytes of a step's two all-reduces: the skin flag, and the plate forces' exact sum (26
-/// words: [`crate::solver::shear::exact::LIMB_LEN`] and an error count).
-const REDUCE_BYTES: f64 = 8.0 * (1.0 + 26.0);
+/// Bytes of a step's all-reduce: the plate forces' exact sum
+/// ([`crate::solver::shear::exact::LIMB_LEN`] words), an error count and the skin flag.
+const REDUCE_BYTES: f64 = 8.0 * (crate::solver::shear::exact::LIMB_LEN as f64 + 2.0);
+/// A step's all-reduces: one (the plate sum waits for the next step's skin flag,
+/// [`crate::solver::shear::decompose`]); the design before had two.
+const STEP_REDUCES: f64 = 1.0;
+const STEP_REDUCES_BEFORE: f64 = 2.0;
 
 /// The costs a 1-rank run measured.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -192,11 +197,14 @@ fn point(
     let (messages_built, messages_all_to_all) = if r == 1 {
         (0.0, 0.0)
     } else {
-        let step = neighbours + 2.0 * log_r;
         let rebuild = |m: f64| m / k.steps_per_rebuild;
         (
-            step + rebuild(REBUILD_REDUCES * log_r + REBUILD_NEIGHBOUR_MESSAGES * neighbours),
-            step + rebuild(log_r + REBUILD_ALL_TO_ALL_CALLS * others),
+            neighbours
+                + STEP_REDUCES * log_r
+                + rebuild(REBUILD_REDUCES * log_r + REBUILD_NEIGHBOUR_MESSAGES * neighbours),
+            neighbours
+                + STEP_REDUCES_BEFORE * log_r
+                + rebuild(log_r + REBUILD_ALL_TO_ALL_CALLS * others),
         )
     };
     // each brick's compute time, and bytes received per step
@@ -307,7 +315,7 @@ mod tests {
     use crate::spec::RollingModel;
 
     /// The costs give back the 1-rank run's time per step; one brick exchanges nothing and
-    /// takes that time; two bricks exchange as built (one ghost message and two all-reduces
+    /// takes that time; two bricks exchange as built (one ghost message and one all-reduce
     /// a step, the rebuild's messages amortised) and receive the ghosts' bytes and the
     /// all-reduces'; the all-to-all rebuilds of before sent more messages beyond a few
     /// bricks.
@@ -336,10 +344,10 @@ mod tests {
         let (one, two) = (&m.points[0], &m.points[1]);
         assert_eq!((one.messages_built, one.bytes_per_step), (0.0, 0.0));
         assert!((one.here_built_s.unwrap() / m.one_rank_s - 1.0).abs() < 1e-9);
-        // 2 x 1 bricks: one neighbour, two all-reduces of one message each; a rebuild every
-        // 100 steps: two all-reduces and 4 messages to the neighbour (before: one all-reduce
-        // and 4 all-to-alls of one message each)
-        assert_eq!(two.messages_built, 1.0 + 2.0 + (2.0 + 4.0) / 100.0);
+        // 2 x 1 bricks: one neighbour, one all-reduce of one message; a rebuild every 100
+        // steps: two all-reduces and 4 messages to the neighbour (before: two all-reduces a
+        // step, and at a rebuild one all-reduce and 4 all-to-alls of one message each)
+        assert_eq!(two.messages_built, 1.0 + 1.0 + (2.0 + 4.0) / 100.0);
         assert_eq!(two.messages_all_to_all, 1.0 + 2.0 + (1.0 + 4.0) / 100.0);
         let (splits, _) = censuses(&s, &[2]);
         let cen = &splits[0].1;

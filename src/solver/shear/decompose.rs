@@ -20,14 +20,19 @@
 //!   (`bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process`). A pair with
 //!   members in two bricks is computed in both (LIGGGHTS' newton off) from equal inputs, so
 //!   both copies of its history stay equal. Pairs of two ghosts are not listed.
-//! - **Every step**: the drift (a ghost's drift is discarded), the ghosts' positions and
-//!   velocities sent by their owners to the bricks that hold them (`forward`: messages to
-//!   neighbouring bricks only), the skin/2 test summed over the bricks (an all-reduce of one
-//!   word), the plates moved (identically in every brick), forces for the own particles, the
-//!   plate forces summed exactly by each brick over its own particles and over the bricks by
-//!   an all-reduce of a few hundred bytes (any order gives one process's bits:
-//!   [`super::exact`]), the final half-kick, and the servo (identically in every brick, from
-//!   the same sums).
+//! - **Every step**: the drift (a ghost's drift is discarded); **one all-reduce** of a few
+//!   hundred bytes: the skin/2 test and the last step's plate forces, each brick's exact sum
+//!   over its own particles added over the bricks (any order gives one process's bits:
+//!   [`super::exact`]), with whether its force evaluation failed; the servo's update from
+//!   those sums (identically in every brick); the ghosts' positions and velocities sent by
+//!   their owners to the bricks that hold them (`forward`: messages to neighbouring bricks
+//!   only); the plates moved (identically in every brick); forces for the own particles and
+//!   the final half-kick. The plate sum waits for the next step's all-reduce because nothing
+//!   reads it before the next step moves the plates (the drift and the half-kick read the
+//!   particles only): a step synchronises the bricks once, not twice, so the per-step
+//!   spread of two bricks' times is waited for once. Every call that reads the state
+//!   between steps (gathering it, a setup, an agreement) first settles the sum
+//!   ([`Brick::settle`]); the servo then holds one process's bits.
 //! - **A rebuild** wraps the own particles, sends each one whose owner changed to its new
 //!   brick with every per-particle state it carries (velocities, force, torque, rotation,
 //!   plate contact records) and the histories of its pairs (`migrate`), then each brick
@@ -524,6 +529,18 @@ pub struct Brick {
     /// What the busy time counts for in the balance (1: as measured; tests make one brick
     /// count more, as if something else slowed it).
     pub cost_factor: f64,
+    /// The last force evaluation's plate sum over this brick's own particles (or its
+    /// failure), added over the bricks by the next step's all-reduce or a settle.
+    pending: Option<PendingPlates>,
+}
+
+/// A brick's share of a step's plate forces, not yet added over the bricks.
+struct PendingPlates {
+    limbs: [u64; LIMB_LEN],
+    /// The evaluation's error on this brick, said to every brick when they add the sums.
+    failed: Option<Error>,
+    /// The step of the evaluation.
+    step: u64,
 }
 
 impl Brick {
@@ -588,6 +605,7 @@ impl Brick {
             order: Vec::new(),
             busy_ns: 0,
             cost_factor: 1.0,
+            pending: None,
         };
         b.size_messages();
         b
@@ -604,18 +622,23 @@ impl Brick {
     /// A run's setup ([`ShearSim::setup`]) in every brick: the stage speed, a rebuild, and
     /// forces without history update.
     pub fn setup(&mut self, t: &impl Transport, bottom_speed: f64) -> Result<()> {
+        self.settle(t)?;
         self.sim.setup_plates(bottom_speed);
         self.rebuild(t)?;
         let local = self.sim.forces_and_kick(false, false);
         self.plate_forces(t, local).map(|_| ())
     }
 
-    /// One time step ([`ShearSim::step`]) in every brick.
+    /// One time step ([`ShearSim::step`]) in every brick, its plate sum left for the next
+    /// step's all-reduce (module notes; [`Brick::settle`] adds it at once).
     pub fn step(&mut self, t: &impl Transport) -> Result<()> {
         let start = Instant::now();
+        // a brick whose last evaluation failed drifts too (its error is said below, before
+        // anything reads the drifted state), so every brick is at the same step
         let moved = self.sim.drift();
         self.count_busy(start);
-        let moved = self.forward(t, moved);
+        let moved = self.add_plates(t, moved)?;
+        self.forward(t);
         self.sim.lap(|p| &mut p.comm);
         self.sim.move_plates();
         self.sim.lap(|p| &mut p.plates);
@@ -628,11 +651,74 @@ impl Brick {
         let start = Instant::now();
         let local = self.sim.forces_of_step();
         self.count_busy(start);
-        let kicked = self.plate_forces(t, local)?;
         let start = Instant::now();
-        self.sim.finish_step(kicked);
+        let s = &self.sim;
+        let mine = super::exact::sum(self.plates.iter().map(|&q| s.wall_force[q as usize]));
+        self.sim.lap(|p| &mut p.sum_walls);
+        let failed = match local {
+            Ok(kicked) => {
+                self.sim.finish_particles(kicked);
+                None
+            }
+            Err(e) => Some(e),
+        };
+        self.pending = Some(PendingPlates {
+            limbs: mine.limbs(),
+            failed,
+            step: self.sim.step,
+        });
         self.count_busy(start);
         Ok(())
+    }
+
+    /// A collective call that reads the state between steps, made with a plate sum still
+    /// waiting, would read a servo one step behind (and could not say an evaluation's
+    /// failure): a fault of the calling code, not of the input.
+    fn assert_settled(&self) {
+        assert!(
+            self.pending.is_none(),
+            "a brick's state read before Brick::settle (Stepper::settle)"
+        );
+    }
+
+    /// Adds the last step's plate sum over the bricks now (an all-reduce, if one waits):
+    /// the plates' forces and the servo as one process's. Every brick calls it at the same
+    /// point; every call of a run's loop that reads the state between steps does first.
+    pub fn settle(&mut self, t: &impl Transport) -> Result<()> {
+        if self.pending.is_some() {
+            self.add_plates(t, false)?;
+        }
+        Ok(())
+    }
+
+    /// The all-reduce of a step (or of a settle): the waiting plate sum and whether its
+    /// evaluation failed on some brick, with `moved` (this brick's skin/2 test); keeps the
+    /// plates' forces and makes the servo's update from them ([`ShearSim::finish_servo`]).
+    /// Returns whether any brick moved beyond skin/2; an evaluation that failed anywhere
+    /// is an error everywhere, with the message of the brick that failed.
+    fn add_plates(&mut self, t: &impl Transport, moved: bool) -> Result<bool> {
+        let pending = self.pending.take();
+        let mut words = [0u64; LIMB_LEN + 2];
+        if let Some(p) = &pending {
+            words[..LIMB_LEN].copy_from_slice(&p.limbs);
+            words[LIMB_LEN] = u64::from(p.failed.is_some());
+        }
+        words[LIMB_LEN + 1] = u64::from(moved);
+        t.sum_u64(&mut words);
+        self.sim.lap(|p| &mut p.comm);
+        if let Some(p) = pending {
+            if words[LIMB_LEN] != 0 {
+                // rare: say why, every brick (at the step of the evaluation)
+                let said = all_gather(t, p.failed.as_ref().map(|e| e.to_string()));
+                let local = p.failed.map_or(Ok(()), Err);
+                agree(local, said, p.step)?;
+            }
+            let mut limbs = [0u64; LIMB_LEN];
+            limbs.copy_from_slice(&words[..LIMB_LEN]);
+            self.sim.keep_plate_forces(PlateSum::from_limbs(&limbs))?;
+            self.sim.finish_servo();
+        }
+        Ok(words[LIMB_LEN + 1] != 0)
     }
 
     fn count_busy(&mut self, since: Instant) {
@@ -642,9 +728,8 @@ impl Brick {
 
     /// The ghosts' positions and velocities from their owners (LAMMPS `forward_comm`), after
     /// the drift: what the pair pass reads of them (messages between neighbouring bricks
-    /// only); with them each brick's `moved` (the skin/2 test of its own particles): true
-    /// when any brick's is (an all-reduce).
-    fn forward(&mut self, t: &impl Transport, moved: bool) -> bool {
+    /// only).
+    fn forward(&mut self, t: &impl Transport) {
         let s = &self.sim;
         for (buf, list) in self.out.iter_mut().zip(&self.send) {
             for (rec, &l) in buf.chunks_exact_mut(9).zip(list) {
@@ -667,9 +752,6 @@ impl Brick {
                 }
             }
         }
-        let mut any = [u64::from(moved)];
-        t.sum_u64(&mut any);
-        any[0] != 0
     }
 
     /// The plate forces of this evaluation: this brick's exact sum over its own particles
@@ -962,6 +1044,7 @@ impl Brick {
     /// not per particle (plates, servo, step, rebuild state) every brick holds alike. Each
     /// pair is sent by the brick that owns its lower id.
     pub fn gather(&self, t: &impl Transport) -> Option<ShearSim> {
+        self.assert_settled();
         let s = &self.sim;
         let own: Vec<usize> = (0..s.x.len()).filter(|&q| !s.ghost[q]).collect();
         let wholes: Vec<Whole> = own
@@ -1071,8 +1154,14 @@ impl Brick {
 pub trait Stepper {
     /// A run's setup ([`ShearSim::setup`]).
     fn setup(&mut self, bottom_speed: f64) -> Result<()>;
-    /// One time step.
+    /// One time step. A brick may leave the step's plate sum to the next step's
+    /// all-reduce ([`Brick::step`]): [`Stepper::settle`] before reading the state.
     fn step(&mut self) -> Result<()>;
+    /// Completes the last step (collective for bricks: [`Brick::settle`]; nothing to do in
+    /// one process). Every call below that reads the state between steps needs it first.
+    fn settle(&mut self) -> Result<()> {
+        Ok(())
+    }
     /// The steps made so far.
     fn steps(&self) -> u64;
     /// The whole state (collective for bricks: gathered on rank 0; None on the others).
@@ -1141,6 +1230,10 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
         self.brick.step(self.transport)
     }
 
+    fn settle(&mut self) -> Result<()> {
+        self.brick.settle(self.transport)
+    }
+
     fn steps(&self) -> u64 {
         self.brick.sim.step
     }
@@ -1152,6 +1245,7 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
     }
 
     fn all_ok(&mut self, ok: bool) -> bool {
+        self.brick.assert_settled();
         !any(self.transport, !ok)
     }
 
@@ -1164,10 +1258,12 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
     }
 
     fn phases_by_rank(&mut self) -> Vec<Option<super::PhaseTimes>> {
+        self.brick.assert_settled();
         all_gather(self.transport, self.brick.sim.phase_times())
     }
 
     fn own_by_rank(&mut self) -> Vec<u64> {
+        self.brick.assert_settled();
         all_gather(self.transport, self.brick.sim.own_particles() as u64)
     }
 }
@@ -1439,6 +1535,7 @@ mod tests {
                             for _ in 0..steps {
                                 b.step(&t).unwrap();
                             }
+                            b.settle(&t).unwrap();
                             let moved = all_gather(&t, b.arrived).iter().sum();
                             (b.gather(&t), moved, b.bricks.clone())
                         })

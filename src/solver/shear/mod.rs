@@ -492,6 +492,13 @@ impl ShearSim {
     /// when `kicked`): nve/sphere's final_integrate, the implicit dashpots, the servo's
     /// update from the top plate's force.
     fn finish_step(&mut self, kicked: bool) {
+        self.finish_particles(kicked);
+        self.finish_servo();
+    }
+
+    /// [`Self::finish_step`]'s particles: nve/sphere's final_integrate (unless the force
+    /// evaluation made it) and the implicit dashpots. Reads nothing of the plates.
+    fn finish_particles(&mut self, kicked: bool) {
         let nve = self.nve;
         let team = self.team();
         let (th, n) = (team.threads(), self.x.len());
@@ -517,6 +524,13 @@ impl ShearSim {
             self.implicit_rotation();
         }
         self.lap(|p| &mut p.integrate);
+    }
+
+    /// [`Self::finish_step`]'s servo: its update from the top plate's force of the step's
+    /// evaluation (`top_force`). Nothing reads the servo before the next step moves the
+    /// plates, so a brick makes it when the plate sums are added over the bricks (at the
+    /// next step's all-reduce, `decompose`).
+    fn finish_servo(&mut self) {
         self.servo.final_integrate(self.top_force, self.nve.dtv);
         self.lap(|p| &mut p.plates);
     }
