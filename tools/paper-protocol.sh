@@ -66,6 +66,10 @@ for src in "$ref"/*/runs/*/; do
   name=$(basename "$(dirname "$(dirname "$src")")")
   run="runs/paper-protocol-$name/runs/$id"
   [ -f "$run/result.json" ] && continue
+  if [ ! -f "$src/result.json.sha256" ]; then
+    echo "error: $src has no result.json.sha256 (fold it with tools/paper-protocol-fold.sh): not restored" >&2
+    exit 1
+  fi
   read -r _ want < "$src/result.json.sha256"
   if [ "$(sha "$src/result.json")" != "$want" ]; then
     echo "error: $src/result.json differs from its record: not restored" >&2
@@ -100,6 +104,10 @@ while IFS= read -r -d '' src; do
   # a run finished here (its run record) or part way here (a newer checkpoint) keeps its own
   [ -f "$(dirname "$dest")/native_run.json" ] || [ -f "$dest" ] && continue
   mkdir -p "$(dirname "$dest")"
+  if [ ! -f "${src%.gz}.sha256" ]; then
+    echo "error: $src has no ${src%.gz}.sha256 (carry it with tools/paper-protocol-carry.sh): not restored" >&2
+    exit 1
+  fi
   gzip -dc "$src" > "$dest.tmp"
   read -r want step < "${src%.gz}.sha256"
   if [ "$(sha "$dest.tmp")" != "$want" ]; then
