@@ -724,6 +724,27 @@ struct ResumeState {
 
 const RESUME_NAME: &str = "resume.json";
 
+/// The run directory's [`ResumeState`]: none yet when the file is absent (a fresh run); a file
+/// that cannot be read or parsed is an error naming it, never a fresh start (which would
+/// delete the restart files and the earlier parts' logs a carried or interrupted run continues
+/// from).
+fn read_resume_state(path: &Path) -> Result<ResumeState> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(ResumeState::default()),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    serde_json::from_str(&text).map_err(|e| {
+        parse_err(
+            path,
+            format!(
+                "not a LIGGGHTS resume record ({e}); move it away to start this run afresh \
+                 (its restart files and logs are then removed)"
+            ),
+        )
+    })
+}
+
 /// Restart files `restart.<step>` in `dir`, by step.
 fn restart_files(dir: &Path) -> Vec<u64> {
     let mut steps: Vec<u64> = std::fs::read_dir(dir)
@@ -747,15 +768,20 @@ fn prune_restarts(dir: &Path, keep: usize) {
 }
 
 /// Where an interrupted LIGGGHTS run of this deck can continue: the newest restart file whose
-/// step has a thermo line in the log (so the file is complete) and lies past the part's start.
+/// step has a thermo line in the running part's log and lies past the part's start (the deck
+/// writes a restart file before the thermo line of its step, so such a file is complete), or
+/// else the restart file the running part itself started from (a part killed before it wrote
+/// a newer one, even before its first thermo line, continues from where it started: before
+/// 2026-12-07 such a run started again from step 0 and its restart files were removed).
 fn resume_point(dir: &Path, state: &ResumeState, deck_sha: &str, ncol: usize) -> Option<u64> {
     if state.deck_sha256 != deck_sha {
         return None;
     }
-    let last = last_thermo_step(&dir.join(LOG_NAME), ncol)?;
-    restart_files(dir)
-        .into_iter()
-        .rfind(|s| *s <= last && *s > state.current_from)
+    let last = last_thermo_step(&dir.join(LOG_NAME), ncol);
+    restart_files(dir).into_iter().rfind(|s| {
+        (*s > state.current_from && last.is_some_and(|l| *s <= l))
+            || (*s == state.current_from && *s > 0)
+    })
 }
 
 /// The thermo rows of a run made of parts: the row of step `t` comes from the last part that
@@ -812,17 +838,18 @@ pub fn run_liggghts(
     );
     let ncol = THERMO_COLUMNS.len();
     let state_path = dir.join(RESUME_NAME);
-    let mut state: ResumeState = std::fs::read_to_string(&state_path)
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or_default();
+    let mut state = read_resume_state(&state_path)?;
     let deck = match resume_point(&dir, &state, &deck_sha, ncol) {
         Some(step) => {
-            // keep the interrupted part's log; the new part writes log.liggghts
-            let part = format!("log.{}.liggghts", state.earlier.len());
-            std::fs::rename(dir.join(LOG_NAME), dir.join(&part))
-                .map_err(|e| Error::io(dir.join(LOG_NAME), e))?;
-            state.earlier.push((part, state.current_from));
+            // keep the interrupted part's log; the new part writes log.liggghts (a part
+            // killed before LIGGGHTS opened its log left none: it continues from its own
+            // start, `step` is `current_from`, and there is no part to keep)
+            if dir.join(LOG_NAME).exists() {
+                let part = format!("log.{}.liggghts", state.earlier.len());
+                std::fs::rename(dir.join(LOG_NAME), dir.join(&part))
+                    .map_err(|e| Error::io(dir.join(LOG_NAME), e))?;
+                state.earlier.push((part, state.current_from));
+            }
             state.current_from = step;
             crate::run::tell::note(&format!(
                 "LIGGGHTS seed {}: continuing from its restart file at step {step} (from there \
@@ -839,7 +866,17 @@ pub fn run_liggghts(
             )
         }
         None => {
-            for s in restart_files(&dir) {
+            let old = restart_files(&dir);
+            if !old.is_empty() {
+                crate::run::tell::note(&format!(
+                    "LIGGGHTS seed {}: restart files in {} at steps {old:?} are not this run's \
+                     to continue from (another deck, or none complete): removed, starting from \
+                     step 0",
+                    case.seed,
+                    dir.display()
+                ));
+            }
+            for s in old {
                 let _ = std::fs::remove_file(dir.join(format!("{RESTART_PREFIX}{s}")));
             }
             for (log, _) in &state.earlier {
@@ -1030,6 +1067,90 @@ pub fn write_packing(packing: &Packing, path: &Path) -> Result<()> {
 mod tests {
     use super::*;
     use crate::spec::RollingModel;
+
+    /// Where a LIGGGHTS run continues: the newest restart file the running part's log shows
+    /// complete; a newer one being written is passed over; a part killed before it wrote its
+    /// own continues from the file it started from, even with no thermo line yet; a first part
+    /// with no thermo line, or another deck, starts afresh.
+    #[test]
+    fn a_liggghts_run_continues_from_its_newest_complete_restart_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let ncol = THERMO_COLUMNS.len();
+        let log = |steps: &[u64]| {
+            let mut t = String::from("Setting up run\nStep a b\n");
+            for s in steps {
+                t += &format!("{s}{}\n", " 1.5".repeat(ncol));
+            }
+            std::fs::write(d.join(LOG_NAME), t).unwrap();
+        };
+        let restart =
+            |s: u64| std::fs::write(d.join(format!("{RESTART_PREFIX}{s}")), b"r").unwrap();
+        let state = |from: u64| ResumeState {
+            deck_sha256: "deck".into(),
+            earlier: Vec::new(),
+            current_from: from,
+        };
+        // the first part: no thermo line yet, nothing to continue from
+        restart(300_000);
+        log(&[]);
+        assert_eq!(resume_point(d, &state(0), "deck", ncol), None);
+        log(&[0, 1000, 299_000, 300_000, 301_000]);
+        assert_eq!(resume_point(d, &state(0), "deck", ncol), Some(300_000));
+        assert_eq!(resume_point(d, &state(0), "other deck", ncol), None);
+        // restart.600000 being written: its thermo line not yet in the log
+        restart(600_000);
+        log(&[0, 300_000, 599_000]);
+        assert_eq!(resume_point(d, &state(0), "deck", ncol), Some(300_000));
+        log(&[0, 300_000, 600_000]);
+        assert_eq!(resume_point(d, &state(0), "deck", ncol), Some(600_000));
+        // a part started from 600,000, killed before it wrote restart.900000: from 600,000
+        // again, with its first thermo line or without
+        log(&[600_000, 601_000]);
+        assert_eq!(
+            resume_point(d, &state(600_000), "deck", ncol),
+            Some(600_000)
+        );
+        log(&[]);
+        assert_eq!(
+            resume_point(d, &state(600_000), "deck", ncol),
+            Some(600_000)
+        );
+        std::fs::remove_file(d.join(LOG_NAME)).unwrap();
+        assert_eq!(
+            resume_point(d, &state(600_000), "deck", ncol),
+            Some(600_000)
+        );
+    }
+
+    /// A LIGGGHTS run's resume record: absent is a fresh run; present and valid is read back;
+    /// present and damaged (cut short by a full disk, or edited) is an error naming the file
+    /// (`run_liggghts` stops there; a fresh start would remove the restart files).
+    #[test]
+    fn a_damaged_resume_record_is_an_error_not_a_fresh_start() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join(RESUME_NAME);
+        let fresh = read_resume_state(&p).unwrap();
+        assert!(fresh.deck_sha256.is_empty() && fresh.earlier.is_empty());
+        let state = ResumeState {
+            deck_sha256: "ab".repeat(32),
+            earlier: vec![("log.0.liggghts".into(), 0)],
+            current_from: 300_000,
+        };
+        std::fs::write(&p, serde_json::to_string(&state).unwrap()).unwrap();
+        let back = read_resume_state(&p).unwrap();
+        assert_eq!(
+            (back.deck_sha256, back.earlier, back.current_from),
+            (state.deck_sha256, state.earlier, state.current_from)
+        );
+        let text = serde_json::to_string(&ResumeState::default()).unwrap();
+        std::fs::write(&p, &text[..text.len() / 2]).unwrap();
+        let e = read_resume_state(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(RESUME_NAME) && e.contains("not a LIGGGHTS resume record"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn displacement_follows_the_stage_schedule() {
