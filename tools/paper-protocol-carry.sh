@@ -8,7 +8,8 @@
 # finished since (their run record) are removed. Run it at the end of a session and commit
 # carried/ (outside reference/: results there, never checkpoints; each commit adds 1-5 MB per
 # run to the history, against 7-18 h of a core lost per run). ParaView snapshots are not
-# carried (159 MB per run).
+# carried (159 MB per run). A LIGGGHTS run part way is carried too (below): its logs, profile
+# dumps and restart files, which it continues from.
 #   bash tools/paper-protocol-carry.sh [DIR]    DIR default /work/paper-protocol
 set -euo pipefail
 dir=${1:-/work/paper-protocol}
@@ -60,4 +61,58 @@ while IFS= read -r -d '' cp; do
   echo "carried $rel at step $step ($(du -h "$dest.gz" | cut -f1))"
   carried=$((carried + 1))
 done < <(find "$dir/runs" -name native_checkpoint.bin -print0)
-echo "$carried checkpoint(s) carried in $out"
+# LIGGGHTS runs part way (a liggghts/ folder with resume.json and no liggghts_run.json beside
+# it): what `verify` continues such a run from (src/shear.rs `run_liggghts`): resume.json, the
+# logs of every part (their thermo rows make the series), the profile dumps written so far
+# (read at the end) and the restart files, in one tar (gzip -n) at
+# carried/paper-protocol/<path under runs/ of liggghts/>.tar.gz with <path>.sha256 ("SHA-256
+# of the tar, the newest restart step"). The logs are copied before the restart files: a
+# restart file is complete once a thermo line of its step is in the log (the deck writes the
+# restart file, then thermo), so the copied log names only restart files complete before it
+# was copied, and `verify` continues from the newest of those (the copy of a newer one that
+# was being written is passed over). Snapshots are not carried (ParaView; 100+ MB).
+while IFS= read -r -d '' gz; do
+  rel=${gz#"$out/"}
+  here="$dir/runs/${rel%.tar.gz}"
+  if [ -f "$(dirname "$here")/liggghts_run.json" ]; then
+    rm "$gz" "${gz%.tar.gz}.sha256"
+    echo "finished since: ${rel%.tar.gz} no longer carried"
+  fi
+done < <(find "$out" -name 'liggghts.tar.gz' -print0 2>/dev/null)
+[ -d "$out" ] && find "$out" -mindepth 1 -type d -empty -delete
+lig=0
+while IFS= read -r -d '' state; do
+  src=$(dirname "$state")
+  [ -f "$(dirname "$src")/liggghts_run.json" ] && continue
+  rel=${src#"$dir/runs/"}
+  dest="$out/$rel"
+  stage=$(mktemp -d)
+  chmod 755 "$stage"
+  cp "$state" "$stage/"
+  for f in "$src"/log*.liggghts "$src"/prof_*.dump; do
+    [ -f "$f" ] && cp "$f" "$stage/"
+  done
+  steps=()
+  for f in "$src"/restart.*; do
+    [ -f "$f" ] || continue
+    # pruned by the run since it was listed: passed over
+    cp "$f" "$stage/" 2>/dev/null && steps+=("${f##*/restart.}")
+  done
+  if [ "${#steps[@]}" -eq 0 ]; then
+    echo "not carried: $rel has no restart file yet (a carried copy, if any, stays)"
+    rm -rf "$stage"
+    continue
+  fi
+  mkdir -p "$(dirname "$dest")"
+  tar -C "$stage" -cf "$dest.tar.tmp" .
+  rm -rf "$stage"
+  sum=$(sha256sum "$dest.tar.tmp" | cut -d' ' -f1)
+  newest=$(printf '%s\n' "${steps[@]}" | sort -n | tail -1)
+  gzip -nc "$dest.tar.tmp" > "$dest.tar.gz.tmp"
+  rm "$dest.tar.tmp"
+  mv "$dest.tar.gz.tmp" "$dest.tar.gz"
+  echo "$sum $newest" > "$dest.sha256.tmp" && mv "$dest.sha256.tmp" "$dest.sha256"
+  echo "carried LIGGGHTS $rel, restart files at ${steps[*]} ($(du -h "$dest.tar.gz" | cut -f1))"
+  lig=$((lig + 1))
+done < <(find "$dir/runs" -path '*/liggghts/resume.json' -print0)
+echo "$carried checkpoint(s) and $lig LIGGGHTS run(s) carried in $out"

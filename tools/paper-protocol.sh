@@ -6,22 +6,38 @@
 # their checkpoints (finished runs are reused).
 #   bash tools/paper-protocol.sh [DIR]          DIR default /work/paper-protocol
 #   COMMIT=<sha> changes the recorded commit (a new binary: say so on the issue)
+#   LIGGGHTS_COMMIT=<sha> changes the LIGGGHTS study's (below)
+#   RESTORE_ONLY=1 puts back finished and carried runs (below) and starts no queue
 set -euo pipefail
 commit=${COMMIT:-cd821d51e8b0adb2a52b6f72dcced8182d4e9a99}
+# The LIGGGHTS study (paper-protocol-liggghts.toml, not started before 2026-12-07) runs from a
+# later commit: there a LIGGGHTS part killed before it wrote a restart file of its own continues
+# from the one it started from (cd821d5 started such a run again from step 0, removing its
+# restart files: 20 h of a core lost to a session that ended within minutes of a resume), and a
+# damaged resume record is an error, not a fresh start. The native studies keep cd821d5 (a
+# later binary changes their bits: the exact plate sum).
+lig_commit=${LIGGGHTS_COMMIT:-245d4aebfd6e2d507a9470a6b8a7213a0fcc4255}
 dir=${1:-/work/paper-protocol}
-repo=$(cd "$(dirname "$0")/.." && pwd)
-short=${commit:0:7}
-bin="$dir/bin-$short/bin/verify"
+# the clone (the queue runs a copy of this script in DIR: it is told where the clone is)
+repo=${REPO:-$(cd "$(dirname "$0")/.." && pwd)}
 mkdir -p "$dir/studies"
 cd "$dir"
-if [ ! -x "$bin" ]; then
-  [ -d src ] || git clone -q "$repo" src
-  git -C src fetch -q "$repo" 2>/dev/null || true
-  git -C src checkout -q "$commit"
-  CARGO_TARGET_DIR="$dir/target" cargo install --locked --path src --root "bin-$short" > install.log 2>&1
-  printf 'binary: %s\ncommit: %s\nbuilt: %s on %s (%s)\n' "$bin" "$commit" "$(date -u +%FT%TZ)" \
-    "$(hostname)" "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)" >> PROVENANCE
-fi
+# the binary of a recorded commit, installed once into bin-<short>/ (PROVENANCE says which)
+install_bin() {
+  local c=$1 short=${1:0:7}
+  local b="$dir/bin-$short/bin/verify"
+  if [ ! -x "$b" ]; then
+    [ -d src ] || git clone -q "$repo" src
+    git -C src fetch -q "$repo" 2>/dev/null || true
+    git -C src checkout -q "$c"
+    CARGO_TARGET_DIR="$dir/target" cargo install --locked --path src --root "bin-$short" \
+      > "install-$short.log" 2>&1
+    printf 'binary: %s\ncommit: %s\nbuilt: %s on %s (%s)\n' "$b" "$c" "$(date -u +%FT%TZ)" \
+      "$(hostname)" "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)" >> PROVENANCE
+  fi
+  echo "$b"
+}
+bin=$(install_bin "$commit")
 # Two slots, one core each; each runs its queue of studies in order. A finished study is passed
 # over in seconds (its results are reused), so rerunning the queue resumes where it stopped:
 # epsd: the five seed-1 points, then their seed 2 (the eta_r = 0.5 points first, the manifest's
@@ -37,9 +53,12 @@ if [ "${QUEUE:-}" ]; then
   # with `kill -STOP -- -$(cat pid-NAME)`, resume with -CONT)
   declare -n queue="queue_$QUEUE"
   for study in "${queue[@]}"; do
-    echo "$(date -u +%FT%TZ) $QUEUE: verify run studies/$study ($bin)" >> runs.log
+    b=$bin
+    # installed when the queue comes to it (a machine replaced meanwhile installs it again)
+    [ "$study" = paper-protocol-liggghts.toml ] && b=$(install_bin "$lig_commit")
+    echo "$(date -u +%FT%TZ) $QUEUE: verify run studies/$study ($b)" >> runs.log
     # shellcheck disable=SC2086 # a study and its extra flags, split on purpose
-    if ! "$bin" run studies/$study; then
+    if ! "$b" run studies/$study; then
       echo "$(date -u +%FT%TZ) $QUEUE: studies/$study failed: queue stopped" >> runs.log
       exit 1
     fi
@@ -119,6 +138,39 @@ while IFS= read -r -d '' src; do
   echo "$(date -u +%FT%TZ) restored checkpoint $dest at step $step from $src (checked)" \
     | tee -a runs.log
 done < <(find "$repo/carried/paper-protocol" -name '*.bin.gz' -print0 2>/dev/null)
+# carried LIGGGHTS runs part way: carried/paper-protocol/<path of liggghts/>.tar.gz with
+# <path>.sha256 ("SHA-256-of-the-tar newest-restart-step"), unpacked into that liggghts/ folder
+# where the run has neither finished here (liggghts_run.json) nor a part here (resume.json);
+# `verify` continues it from the newest restart file its logs show complete
+while IFS= read -r -d '' src; do
+  rel=${src#"$repo/carried/paper-protocol/"}
+  dest="runs/${rel%.tar.gz}"
+  [ -f "$(dirname "$dest")/liggghts_run.json" ] || [ -f "$dest/resume.json" ] && continue
+  if [ ! -f "${src%.tar.gz}.sha256" ]; then
+    echo "error: $src has no ${src%.tar.gz}.sha256 (carry it with tools/paper-protocol-carry.sh): not restored" >&2
+    exit 1
+  fi
+  read -r want step < "${src%.tar.gz}.sha256"
+  rm -rf "$dest.restore"
+  mkdir -p "$dest.restore"
+  gzip -dc "$src" > "$dest.restore.tar"
+  if [ "$(sha "$dest.restore.tar")" != "$want" ]; then
+    rm -rf "$dest.restore" "$dest.restore.tar"
+    echo "error: $src: SHA-256 differs from its record: not restored" >&2
+    exit 1
+  fi
+  tar -C "$dest.restore" -xf "$dest.restore.tar"
+  rm "$dest.restore.tar"
+  # a LIGGGHTS folder without resume.json (a run that had only just started here) is kept aside
+  [ -d "$dest" ] && mv "$dest" "$dest.set-aside-$(date -u +%Y%m%dT%H%M%S)"
+  mv "$dest.restore" "$dest"
+  echo "$(date -u +%FT%TZ) restored LIGGGHTS run $dest (restart files up to step $step) from $src (checked)" \
+    | tee -a runs.log
+done < <(find "$repo/carried/paper-protocol" -name 'liggghts.tar.gz' -print0 2>/dev/null)
+if [ "${RESTORE_ONLY:-}" ]; then
+  echo "RESTORE_ONLY: finished runs and carried runs put back in $dir; no queue started"
+  exit 0
+fi
 # alive: the queue (or a run it started) exists and is not a zombie (an exited queue nobody
 # reaped yet); a pid of a session gone may belong to another process by now: its command
 # must be the queue's or a study's
@@ -134,7 +186,7 @@ for s in epsd implicit; do
   # the queue runs a copy of this script (a new file each time, so a queue still running keeps
   # reading the one it started with)
   cp "$repo/tools/paper-protocol.sh" queue.sh.tmp && mv queue.sh.tmp queue.sh
-  QUEUE=$s setsid nohup bash queue.sh "$dir" >> "log-$s.txt" 2>&1 &
+  QUEUE=$s REPO=$repo setsid nohup bash queue.sh "$dir" >> "log-$s.txt" 2>&1 &
   echo $! > "pid-$s"
   echo "$s: queue started (pid $!, its own process group), log $dir/log-$s.txt"
 done
