@@ -823,6 +823,67 @@ fn max_kernel_variable_caps_the_paths_and_refuses_bad_values() {
     );
 }
 
+/// The bench's scaling model is fitted to the kernel path its ratios and its model check use
+/// (the fastest at 1 thread), not to the first path benched: its one-process time per step is
+/// that path's 1-rank, 1-thread run's phases per step, exactly (before, the scalar path's was
+/// checked against the fastest path's 2-rank run: measured / predicted 0.65-0.74 from that
+/// alone). Every path this machine has is benched, scalar first, on 2,500 particles, where a
+/// SIMD path is the fastest (so the first path benched is not the one reported).
+#[test]
+fn bench_fits_its_scaling_model_to_the_kernel_it_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bench");
+    let o = verify(&[
+        "bench",
+        "--native-only",
+        "--steps",
+        "300",
+        "--compression-steps",
+        "200",
+        "--threads",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", common::text(&o));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).unwrap()).unwrap();
+    let kernel = &r["kernel"];
+    let per_step = |row: &serde_json::Value| {
+        let p = &row["phases"];
+        let sum: f64 = ["pairs", "sum_walls", "integrate", "neighbor", "plates"]
+            .iter()
+            .map(|k| p[k].as_f64().unwrap())
+            .sum();
+        sum / p["steps"].as_f64().unwrap()
+    };
+    let rows: Vec<_> = r["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|x| x["code"] == "native" && x["workers"] == 1 && x["ranks"] == 1)
+        .collect();
+    assert!(!rows.is_empty(), "{r}");
+    let fitted = r["scaling"]["one_rank_s"].as_f64().unwrap();
+    for row in &rows {
+        let rel = (fitted / per_step(row) - 1.0).abs();
+        if row["kernel"] == *kernel {
+            assert!(
+                rel < 1e-9,
+                "fitted {fitted} against {kernel}'s {}",
+                per_step(row)
+            );
+        } else {
+            // another path's run is another time per step
+            assert!(
+                rel > 1e-6,
+                "fitted to {} instead of {kernel}",
+                row["kernel"]
+            );
+        }
+    }
+}
+
 /// `verify bench --rounds 2` runs both codes twice, in rounds, and reports the median of the
 /// rounds' ratios (of two, their mean) besides each round's; 0 rounds is refused naming the
 /// option and its range.

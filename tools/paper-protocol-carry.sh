@@ -32,18 +32,24 @@ u.feed(open(sys.argv[1], "rb").read())
 print(next(u)[5][-1][0])
 EOF
 }
-# carried runs finished since, or no longer part way here with nothing newer: their copies go
+# carried runs finished since (the run record beside the seed's checkpoint or liggghts/
+# folder: native_run.json, liggghts_run.json): their copies go
 while IFS= read -r -d '' gz; do
-  rel=${gz#"$out/"}
-  here="$dir/runs/${rel%.gz}"
-  if [ -f "$(dirname "$here")/native_run.json" ]; then
-    rm "$gz" "${gz%.gz}.sha256"
-    echo "finished since: ${rel%.gz} no longer carried"
+  case $gz in
+    *.bin.gz) base=${gz%.gz} code=native ;;
+    *) base=${gz%.tar.gz} code=liggghts ;;
+  esac
+  rel=${base#"$out/"}
+  if [ -f "$(dirname "$dir/runs/$rel")/${code}_run.json" ]; then
+    rm "$gz" "$base.sha256"
+    echo "finished since: $rel no longer carried"
   fi
-done < <(find "$out" -name '*.bin.gz' -print0 2>/dev/null)
+done < <(find "$out" \( -name '*.bin.gz' -o -name liggghts.tar.gz \) -print0 2>/dev/null)
 [ -d "$out" ] && find "$out" -mindepth 1 -type d -empty -delete
 carried=0
 while IFS= read -r -d '' cp; do
+  # a finished run removes its checkpoint; one left beside its run record is not carried
+  [ -f "$(dirname "$cp")/native_run.json" ] && continue
   rel=${cp#"$dir/runs/"}
   dest="$out/$rel"
   mkdir -p "$(dirname "$dest")"
@@ -71,15 +77,6 @@ done < <(find "$dir/runs" -name native_checkpoint.bin -print0)
 # restart file, then thermo), so the copied log names only restart files complete before it
 # was copied, and `verify` continues from the newest of those (the copy of a newer one that
 # was being written is passed over). Snapshots are not carried (ParaView; 100+ MB).
-while IFS= read -r -d '' gz; do
-  rel=${gz#"$out/"}
-  here="$dir/runs/${rel%.tar.gz}"
-  if [ -f "$(dirname "$here")/liggghts_run.json" ]; then
-    rm "$gz" "${gz%.tar.gz}.sha256"
-    echo "finished since: ${rel%.tar.gz} no longer carried"
-  fi
-done < <(find "$out" -name 'liggghts.tar.gz' -print0 2>/dev/null)
-[ -d "$out" ] && find "$out" -mindepth 1 -type d -empty -delete
 lig=0
 while IFS= read -r -d '' state; do
   src=$(dirname "$state")
