@@ -549,4 +549,23 @@ mod tests {
         let e = profiles(&c, &s).unwrap_err().to_string();
         assert!(e.contains("19 of 20"), "{e}");
     }
+
+    /// A stored profile read back and written again keeps every bit: a reused run (`verify
+    /// shear` stores a finished seed's results again when it resumes) must not rewrite its
+    /// figures. This file, written by a 25,000-particle run, came back one unit in the last
+    /// place off in four numbers when serde_json parsed without its `float_roundtrip` feature.
+    #[test]
+    fn stored_profiles_read_back_to_the_same_bits() {
+        let text = include_str!("../reference/scaled/25k/seed1/native_profile.json");
+        let p: Vec<VelocityProfile> = serde_json::from_str(text).unwrap();
+        assert!(!p.is_empty() && !p[0].layers.is_empty());
+        assert_eq!(serde_json::to_string_pretty(&p).unwrap(), text);
+        let x = 0.993_279_993_199_018_3_f64;
+        assert_eq!(
+            serde_json::from_str::<f64>("0.9932799931990183")
+                .unwrap()
+                .to_bits(),
+            x.to_bits()
+        );
+    }
 }

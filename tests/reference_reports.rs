@@ -246,3 +246,55 @@ fn sweep_verdicts_are_as_written(root: &Path, group: &str, sweeps: &toml::Table)
         }
     }
 }
+
+/// reference/scaled: every stored series and profile is the one its run record names (the
+/// series kept gzipped), and the 25,000-particle seed 1 made again on 2 MPI ranks
+/// (`25k-2ranks/`) recorded the 1-rank run's series and profile to the bit.
+#[test]
+fn scaled_runs_are_their_records_and_two_ranks_wrote_one_ranks_bits() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("reference/scaled");
+    let record = |dir: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join("native_run.json")).unwrap())
+            .unwrap()
+    };
+    let mut seeds = 0;
+    for size in ["2500", "25k"] {
+        for e in std::fs::read_dir(root.join(size)).unwrap() {
+            let dir = e.unwrap().path();
+            if !dir.is_dir() {
+                continue;
+            }
+            let rec = record(&dir);
+            let csv = std::process::Command::new("gzip")
+                .arg("-dc")
+                .arg(dir.join("native.csv.gz"))
+                .output()
+                .unwrap();
+            assert!(csv.status.success(), "{}: gzip -dc failed", dir.display());
+            assert_eq!(
+                dem_verify::fsutil::sha256_hex(&csv.stdout),
+                rec["sha256"].as_str().unwrap(),
+                "{}: series",
+                dir.display()
+            );
+            let rows = csv.stdout.iter().filter(|&&b| b == b'\n').count();
+            assert!(rows > 100, "{}: {rows} lines", dir.display());
+            let profile = std::fs::read(dir.join("native_profile.json")).unwrap();
+            assert_eq!(
+                dem_verify::fsutil::sha256_hex(&profile),
+                rec["profile_sha256"].as_str().unwrap(),
+                "{}: profile",
+                dir.display()
+            );
+            seeds += 1;
+        }
+    }
+    assert!(seeds >= 4, "{seeds} stored seeds");
+    let (one, two) = (
+        record(&root.join("25k/seed1")),
+        record(&root.join("25k-2ranks/seed1")),
+    );
+    for key in ["steps", "rows", "sha256", "profile_sha256", "case"] {
+        assert_eq!(one[key], two[key], "1 rank against 2 ranks: {key}");
+    }
+}

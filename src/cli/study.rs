@@ -392,7 +392,9 @@ pub fn run_study(mut a: RunArgs, execute: fn(&ArgMatches) -> Result<Verdict>) ->
         .try_get_matches_from(std::iter::once("verify".to_string()).chain(args))
         .map_err(clap_err)?;
     let cli = Cli::from_arg_matches(&matches).map_err(clap_err)?;
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    // under `mpirun` this rank sees the core it is bound to; the run has one per rank
+    let cores =
+        crate::ranks::native_ranks() * std::thread::available_parallelism().map_or(1, |n| n.get());
     match plan(&cli)? {
         Some((p, what)) => p.print(&what, cores),
         None => println!("plan: no estimate for this command"),
