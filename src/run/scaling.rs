@@ -309,10 +309,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::packing::loose_packing;
-    use crate::solver::shear::compact;
-    use crate::spec::shear::{Preset, ShearCase};
-    use crate::spec::RollingModel;
+    use crate::solver::shear::tests::fast_dense;
 
     /// The costs give back the 1-rank run's time per step; one brick exchanges nothing and
     /// takes that time; two bricks exchange as built (one ghost message and one all-reduce
@@ -321,9 +318,8 @@ mod tests {
     /// bricks.
     #[test]
     fn the_model_gives_back_what_it_was_fitted_to() {
-        let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
-        let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
-        let mut s = ShearSim::new(&c.setup(), &dense);
+        let (c, dense) = fast_dense();
+        let mut s = ShearSim::new(&c.setup(), dense);
         s.setup(c.stages[0].speed).unwrap();
         s.time_phases(true);
         for _ in 0..300 {

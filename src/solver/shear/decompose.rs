@@ -1501,8 +1501,7 @@ mod tests {
     use super::*;
     use crate::packing::loose_packing;
     use crate::solver::contact::models::RollingModel;
-    use crate::solver::shear::tests::state_bytes;
-    use crate::solver::shear::{compact, Packing};
+    use crate::solver::shear::tests::{fast_dense, state_bytes};
     use crate::solver::team::on_threads;
     use crate::spec::shear::{Preset, ShearCase};
 
@@ -1676,8 +1675,8 @@ mod tests {
     /// [`Brick::of`] makes it; one brick holds everything, no ghosts.
     #[test]
     fn the_census_counts_what_the_bricks_hold() {
-        let (c, dense) = dense();
-        let mut s = ShearSim::new(&c.setup(), &dense);
+        let (c, dense) = fast_dense();
+        let mut s = ShearSim::new(&c.setup(), dense);
         s.setup(c.stages[0].speed).unwrap();
         for _ in 0..200 {
             s.step().unwrap();
@@ -1707,12 +1706,6 @@ mod tests {
         }
     }
 
-    fn dense() -> (ShearCase, Packing) {
-        let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 4).unwrap();
-        let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
-        (c, dense)
-    }
-
     /// The fast preset's 2,500 particles sheared 1,500 steps from a dense state (rebuilds,
     /// particles changing brick, plate contacts, both rolling dashpots): every bit of the
     /// state (particles, forces, rotations, pair list and histories, plate records and
@@ -1720,10 +1713,10 @@ mod tests {
     /// bricks on 1 and 2 threads each.
     #[test]
     fn bricks_give_one_process_bits_for_any_split_and_thread_count() {
-        let (_, dense) = dense();
+        let (_, dense) = fast_dense();
         for model in [RollingModel::Epsd, RollingModel::EpsdImplicit] {
             let c = ShearCase::preset(Preset::Fast, model, 0.5, 0.5, 4).unwrap();
-            let fresh = ShearSim::new(&c.setup(), &dense);
+            let fresh = ShearSim::new(&c.setup(), dense);
             let speed = c.stages[0].speed;
             let steps = 1500;
             let one = on_threads(1, || {
@@ -1775,8 +1768,8 @@ mod tests {
     /// state through the checkpoint's serialisation) ends with one process's bits.
     #[test]
     fn a_run_stopped_on_two_bricks_resumes_on_three_to_the_same_bits() {
-        let (c, dense) = dense();
-        let fresh = ShearSim::new(&c.setup(), &dense);
+        let (c, dense) = fast_dense();
+        let fresh = ShearSim::new(&c.setup(), dense);
         let speed = c.stages[0].speed;
         let one = on_threads(1, || {
             let mut s = fresh.clone();

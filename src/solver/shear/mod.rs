@@ -1081,16 +1081,31 @@ impl ShearSim {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::packing::loose_packing;
     use crate::solver::contact::models::RollingModel;
-    use crate::spec::shear::ShearCase;
+    use crate::spec::shear::{Preset, ShearCase};
+    use std::sync::OnceLock;
+
+    /// The fast preset's 2,500 particles (epsd, mu_r 0.5, eta_r 0.5, seed 4) after the
+    /// preset's whole compression (40,000 steps): the dense state the thread-count, brick,
+    /// census, resume and scaling-model tests shear. Made once per test process and shared:
+    /// each of those tests made it again before, about 25 s of a core apiece (five of them,
+    /// twice in CI: the library's tests run again on the scalar path).
+    pub(crate) fn fast_dense() -> &'static (ShearCase, Packing) {
+        static DENSE: OnceLock<(ShearCase, Packing)> = OnceLock::new();
+        DENSE.get_or_init(|| {
+            let c = ShearCase::preset(Preset::Fast, RollingModel::Epsd, 0.5, 0.5, 4).unwrap();
+            let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
+            (c, dense)
+        })
+    }
 
     /// Every piece of state a step carries to the next (particles, forces, rotations, pair
     /// list with histories, wall contact slots, plates, servo, rebuild state) as bytes,
     /// f64 as their bits.
-    pub(super) fn state_bytes(s: &ShearSim) -> Vec<u8> {
+    pub(crate) fn state_bytes(s: &ShearSim) -> Vec<u8> {
         rmp_serde::to_vec(&(
             (&s.x, &s.v, &s.omega, &s.f, &s.torque, &s.rotation),
             (&s.nl.pairs, &s.nl.hist, &s.wall, &s.wall_cand),
@@ -1105,18 +1120,15 @@ mod tests {
     /// every bit of the state equal, for the explicit and the implicit rolling dashpot.
     #[test]
     fn bit_identical_for_any_thread_count_at_paper_size() {
-        let preset = |model| {
-            ShearCase::preset(crate::spec::shear::Preset::Fast, model, 0.5, 0.5, 4).unwrap()
-        };
+        let preset = |model| ShearCase::preset(Preset::Fast, model, 0.5, 0.5, 4).unwrap();
         // one dense packing (the preset's whole compression) for both models
-        let c = preset(RollingModel::Epsd);
+        let (c, dense) = fast_dense();
         assert_eq!(c.particles, 2500);
-        let dense = compact(&c.setup(), &loose_packing(&c), c.compression_steps).unwrap();
         for model in [RollingModel::Epsd, RollingModel::EpsdImplicit] {
             let c = preset(model);
             let run = |threads: usize| {
                 crate::solver::team::on_threads(threads, || {
-                    let mut s = ShearSim::new(&c.setup(), &dense);
+                    let mut s = ShearSim::new(&c.setup(), dense);
                     s.setup(c.stages[0].speed).unwrap();
                     for _ in 0..1500 {
                         s.step().unwrap();
