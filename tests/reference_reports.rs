@@ -21,26 +21,13 @@ fn pages(dir: &Path) -> Vec<PathBuf> {
     out
 }
 
-fn copy(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap() {
-        let p = e.unwrap().path();
-        let t = to.join(p.file_name().unwrap());
-        if p.is_dir() {
-            copy(&p, &t);
-        } else {
-            std::fs::copy(&p, &t).unwrap();
-        }
-    }
-}
-
 #[test]
 fn every_stored_page_is_made_again_by_this_version() {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     let tmp = tempfile::tempdir().unwrap();
     let root = tmp.path().join("reference");
     for d in ["nightly", "sweep", "paper-protocol"] {
-        copy(&here.join("reference").join(d), &root.join(d));
+        common::copy_tree(&here.join("reference").join(d), &root.join(d));
     }
     let stored = pages(&root);
     assert!(stored.len() >= 7, "{stored:?}");

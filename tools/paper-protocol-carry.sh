@@ -33,14 +33,20 @@ print(next(u)[5][-1][0])
 EOF
 }
 # carried runs finished since (the run record beside the seed's checkpoint or liggghts/
-# folder: native_run.json, liggghts_run.json): their copies go
+# folder: native_run.json, liggghts_run.json; a native checkpoint's folder here without it):
+# their copies go
 while IFS= read -r -d '' gz; do
   case $gz in
     *.bin.gz) base=${gz%.gz} code=native ;;
     *) base=${gz%.tar.gz} code=liggghts ;;
   esac
   rel=${base#"$out/"}
-  if [ -f "$(dirname "$dir/runs/$rel")/${code}_run.json" ]; then
+  here=$dir/runs/$rel
+  # finished: its run record (a sweep's run), or, for a native checkpoint, its folder here
+  # without it (a finished run removes its checkpoint; a run part way always has one, put
+  # back at the session's start): a convergence study's runs write no run record
+  if [ -f "$(dirname "$here")/${code}_run.json" ] \
+    || { [ $code = native ] && [ -d "$(dirname "$here")" ] && [ ! -f "$here" ]; }; then
     rm "$gz" "$base.sha256"
     echo "finished since: $rel no longer carried"
   fi

@@ -7,8 +7,10 @@
 # (<code>_run.json), rotation map and series (<code>.csv.gz: gzip -n, checked against the
 # SHA-256 its run record holds before it is kept), its steady profiles from the grains'
 # displacements between snapshots (`verify profile`, where snapshots are there); per
-# convergence study its summary, page and figures. Never checkpoints, restart files or ParaView snapshots. A run folded before is
-# checked again (its series' SHA-256), not copied twice. Then every page under reference/ is
+# convergence study each finished run's series and input hash (as each finishes: run the fold
+# before the end-of-session carry when one has), and its summary and figures. Never
+# checkpoints, restart files or ParaView snapshots. A run folded before is checked again (its
+# series' SHA-256), not copied twice. Then every page under reference/ is
 # made again by this clone's binary (tools/rerender-reference.sh: the paper protocol's pages
 # with the implicit runs as stand-ins and the fast preset's speed study beside them).
 #   bash tools/paper-protocol-fold.sh [DIR]     DIR default /work/paper-protocol
@@ -75,12 +77,41 @@ for study in "$dir"/runs/paper-protocol-*; do
   name=${study##*/paper-protocol-}
   out="$repo/reference/paper-protocol/$name"
   if [ ! -f "$study/manifest.json" ]; then
-    # a convergence study: folded once it has written its summary
+    # a convergence study (`verify convergence`: dt<f>/seed<s>/<code>.csv, then <code>.hash,
+    # the input hash that makes the run current, written when the run ends): each finished
+    # run as it finishes, so that a replaced machine gets it back (tools/paper-protocol.sh)
+    # instead of running it again (up to 13 million steps a run): its series gzipped with
+    # its SHA-256 in <code>.sha256, and its .hash; one folded before is checked, not copied
+    # twice. The summary and figures once the study has written them.
+    runs=0
+    for hash in "$study"/dt*/seed*/*.hash; do
+      [ -f "$hash" ] || continue
+      code=$(basename "$hash" .hash)
+      src=$(dirname "$hash")
+      dest="$out/${src#"$study/"}"
+      got=$(sha256sum "$src/$code.csv" | cut -d' ' -f1)
+      if [ -f "$dest/$code.sha256" ]; then
+        read -r want < "$dest/$code.sha256"
+        if [ "$got" != "$want" ]; then
+          echo "error: $src/$code.csv differs from the series folded before ($dest): not folded" >&2
+          exit 1
+        fi
+      else
+        mkdir -p "$dest"
+        gzip -nc "$src/$code.csv" > "$dest/$code.csv.gz.tmp"
+        mv "$dest/$code.csv.gz.tmp" "$dest/$code.csv.gz"
+        cp "$hash" "$dest/$code.hash"
+        echo "$got" > "$dest/$code.sha256.tmp" && mv "$dest/$code.sha256.tmp" "$dest/$code.sha256"
+      fi
+      runs=$((runs + 1))
+    done
+    [ "$runs" -gt 0 ] && echo "$name: $runs finished convergence run(s) in $out"
     [ -f "$study/summary.json" ] || continue
     mkdir -p "$out"
-    for f in summary.json report.html study.toml; do
+    for f in summary.json report.html; do
       [ -f "$study/$f" ] && cp "$study/$f" "$out/"
     done
+    cp "$dir/studies/paper-protocol-$name.toml" "$out/study.toml"
     cp "$study"/*.svg "$out"/ 2>/dev/null || true
     echo "$name: convergence summary folded"
     continue

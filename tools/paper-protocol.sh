@@ -119,6 +119,35 @@ for src in "$ref"/*/runs/*/; do
   mv "$run.restore" "$run"
   echo "$(date -u +%FT%TZ) restored finished run $name/$id from $src (checked)" | tee -a runs.log
 done
+# finished runs of a convergence study (folded as each finishes by
+# tools/paper-protocol-fold.sh: reference/paper-protocol/<study>/dt<f>/seed<s>/<code>.csv.gz
+# with <code>.sha256 and <code>.hash): the series gunzipped and checked against its SHA-256,
+# then the input hash beside it (last: with it the study counts the run as current), where
+# the run has no result here
+for gz in "$ref"/convergence-*/dt*/seed*/*.csv.gz; do
+  [ -f "$gz" ] || continue
+  src=$(dirname "$gz")
+  code=$(basename "$gz" .csv.gz)
+  rel=${src#"$ref/"}
+  dest="runs/paper-protocol-${rel%%/*}/${rel#*/}"
+  [ -f "$dest/$code.hash" ] && continue
+  if [ ! -f "$src/$code.sha256" ] || [ ! -f "$src/$code.hash" ]; then
+    echo "error: $gz has no $code.sha256 or $code.hash beside it (fold it with tools/paper-protocol-fold.sh): not restored" >&2
+    exit 1
+  fi
+  mkdir -p "$dest"
+  gzip -dc "$gz" > "$dest/$code.csv.tmp"
+  read -r want < "$src/$code.sha256"
+  if [ "$(sha "$dest/$code.csv.tmp")" != "$want" ]; then
+    rm "$dest/$code.csv.tmp"
+    echo "error: $gz: SHA-256 differs from its record: not restored" >&2
+    exit 1
+  fi
+  mv "$dest/$code.csv.tmp" "$dest/$code.csv"
+  cp "$src/$code.hash" "$dest/$code.hash.tmp" && mv "$dest/$code.hash.tmp" "$dest/$code.hash"
+  echo "$(date -u +%FT%TZ) restored finished convergence run $dest ($code) from $src (checked)" \
+    | tee -a runs.log
+done
 # carried checkpoints: carried/paper-protocol/<path under runs/>.gz with <path>.sha256
 # ("SHA-256 step")
 while IFS= read -r -d '' src; do

@@ -18,6 +18,20 @@ pub fn verify_bin() -> &'static str {
     env!("CARGO_BIN_EXE_verify")
 }
 
+/// Copies the folder `from` into `to` (made), files and folders below it.
+pub fn copy_tree(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let t = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_tree(&p, &t);
+        } else {
+            std::fs::copy(&p, &t).unwrap();
+        }
+    }
+}
+
 /// Runs the `verify` binary with `args`.
 pub fn verify(args: &[&str]) -> std::process::Output {
     std::process::Command::new(verify_bin())
