@@ -46,7 +46,7 @@ fn a_convergence_study_is_carried_folded_and_put_back_checked() {
             &repo.join("reference").join(d),
         );
     }
-    let dir = tmp.path().join("pp");
+    let dir = new_machine(tmp.path(), "pp");
     let study = dir.join("runs/paper-protocol-convergence-mur1");
     let (done, part) = (study.join("dt1/seed1"), study.join("dt0.25/seed1"));
     std::fs::create_dir_all(&done).unwrap();
@@ -67,7 +67,14 @@ fn a_convergence_study_is_carried_folded_and_put_back_checked() {
     let cp = rmp_serde::to_vec(&(3u32, "{}", 1u32, 1.0f64, Vec::<u8>::new(), rows)).unwrap();
     std::fs::write(&checkpoint, &cp).unwrap();
 
-    // the session's end: the run part way is carried, with its SHA-256 and step
+    // the session's start puts back what the clone holds; its end carries the run part way,
+    // with its SHA-256 and step
+    let (ok, t) = script(&repo, "paper-protocol.sh", &dir, &[("RESTORE_ONLY", "1")]);
+    assert!(ok, "{t}");
+    // (the finished sweep runs it put back are not this test's: the fold would fold them all)
+    for sweep in ["paper-protocol-epsd", "paper-protocol-implicit"] {
+        std::fs::remove_dir_all(dir.join("runs").join(sweep)).unwrap();
+    }
     let carried = repo.join(
         "carried/paper-protocol/paper-protocol-convergence-mur1/dt0.25/seed1/native_checkpoint.bin",
     );

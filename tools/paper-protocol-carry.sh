@@ -43,10 +43,12 @@ while IFS= read -r -d '' gz; do
   rel=${base#"$out/"}
   here=$dir/runs/$rel
   # finished: its run record (a sweep's run), or, for a native checkpoint, its folder here
-  # without it (a finished run removes its checkpoint; a run part way always has one, put
-  # back at the session's start): a convergence study's runs write no run record
+  # without it once tools/paper-protocol.sh has put back everything the clone carried here
+  # (`restored`): a finished run removes its checkpoint, a run part way always has one; a
+  # convergence study's runs write no run record
   if [ -f "$(dirname "$here")/${code}_run.json" ] \
-    || { [ $code = native ] && [ -d "$(dirname "$here")" ] && [ ! -f "$here" ]; }; then
+    || { [ "$code" = native ] && [ -f "$dir/restored" ] && [ -d "$(dirname "$here")" ] \
+      && [ ! -f "$here" ]; }; then
     rm "$gz" "$base.sha256"
     echo "finished since: $rel no longer carried"
   fi

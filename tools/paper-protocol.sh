@@ -200,6 +200,9 @@ while IFS= read -r -d '' src; do
   echo "$(date -u +%FT%TZ) restored LIGGGHTS run $dest (restart files up to step $step) from $src (checked)" \
     | tee -a runs.log
 done < <(find "$repo/carried/paper-protocol" -name 'liggghts.tar.gz' -print0 2>/dev/null)
+# everything the clone holds is back here (the carry reads this: only then does a run folder
+# here without a checkpoint mean a finished run, not one whose restore failed)
+date -u +%FT%TZ > restored.tmp && mv restored.tmp restored
 if [ "${RESTORE_ONLY:-}" ]; then
   echo "RESTORE_ONLY: finished runs and carried runs put back in $dir; no queue started"
   exit 0
