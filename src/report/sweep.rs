@@ -595,12 +595,7 @@ fn bottom_line(page: &mut Page, j: &Judgement) {
         ],
         &text_rows(rows),
     ));
-    let missing_judged: Vec<String> = j
-        .judged_points
-        .iter()
-        .filter(|j| j.point.is_none())
-        .map(|j| format!("{} (mu_r {}, eta_r {})", j.code, j.mu_r, j.eta_r))
-        .collect();
+    let missing_judged = left_out(&j.points, &j.judged_points);
     let substituted = j.judged_points.iter().filter(|j| j.substituted).count();
     page.para(&format!(
         "{} of {} points are unstable at the sweep's dt; {substituted} of them are judged on \
@@ -616,6 +611,42 @@ fn bottom_line(page: &mut Page, j: &Judgement) {
             )
         }
     ));
+}
+
+/// The points left out of the judgement on trustworthy numbers (unstable, no stand-in), one
+/// entry per code and (mu_r, eta_r) naming the speeds of its stages left out: "native (mu_r
+/// 0.5, eta_r 0.5) at 0.0001, 0.0003, 0.001 m/s".
+fn left_out(points: &[Point], judged: &[JudgedPoint]) -> Vec<String> {
+    let mut missing: Vec<(Code, f64, f64, Vec<f64>)> = Vec::new();
+    for m in judged.iter().filter(|j| j.point.is_none()) {
+        let speed = points
+            .iter()
+            .find(|p| {
+                p.code == m.code && p.stage == m.stage && p.mu_r == m.mu_r && p.eta_r == m.eta_r
+            })
+            .map(|p| p.speed);
+        let at = match missing
+            .iter()
+            .position(|(c, mr, er, _)| *c == m.code && *mr == m.mu_r && *er == m.eta_r)
+        {
+            Some(at) => at,
+            None => {
+                missing.push((m.code, m.mu_r, m.eta_r, Vec::new()));
+                missing.len() - 1
+            }
+        };
+        missing[at].3.extend(speed);
+    }
+    missing
+        .iter()
+        .map(|(code, mu_r, eta_r, speeds)| {
+            let at: Vec<String> = speeds.iter().map(|v| v.to_string()).collect();
+            format!(
+                "{code} (mu_r {mu_r}, eta_r {eta_r}) at {} m/s",
+                at.join(", ")
+            )
+        })
+        .collect()
 }
 
 /// Each claim here and in the study beside, as run and on stable or converged numbers, whether
@@ -1209,5 +1240,22 @@ mod tests {
         );
         // no stand-in: left out, and said so
         assert!(j[2].point.is_none() && j[2].note.contains("no stable or converged result"));
+        // once per point, whatever the number of its stages left out, with their speeds
+        let slow = |stage, speed| Point {
+            stage,
+            speed,
+            ..point(1.0, 0.2, false, "epsd at dt 1.5e-6")
+        };
+        let staged = [
+            points[1].clone(),
+            slow(0, 1e-4),
+            slow(1, 3e-4),
+            slow(2, 1e-3),
+        ];
+        let j = judge(&staged, &stand_ins);
+        assert_eq!(
+            left_out(&staged, &j),
+            ["native (mu_r 1, eta_r 0.5) at 0.0001, 0.0003, 0.001 m/s"]
+        );
     }
 }
