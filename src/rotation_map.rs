@@ -29,21 +29,44 @@ fn color(v: f64, hi: f64) -> RGBColor {
     RGBColor(lerp(a.0, b.0), lerp(a.1, b.1), lerp(a.2, b.2))
 }
 
-/// Writes the rotation map of `s` (box length `box_x` along x) to `path`. The colour scale
-/// runs from 0 to the 99th percentile of the rotations (a few spinning grains do not wash
-/// the map out); its top is labelled.
-pub fn rotation_map(path: &Path, title: &str, s: &Snapshot, box_x: f64) -> Result<()> {
-    let mag: Vec<f64> = s
-        .rotation
-        .iter()
-        .map(|r| (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt())
-        .collect();
+/// The top of a map's colour scale: the 99th percentile of the rotations `mag` (a few
+/// spinning grains do not wash the map out); 1 where there is none.
+pub fn scale_top(mag: &[f64]) -> f64 {
     let mut sorted: Vec<f64> = mag.iter().copied().filter(|v| v.is_finite()).collect();
     sorted.sort_by(f64::total_cmp);
-    let hi = sorted
+    sorted
         .get(((sorted.len() as f64 * 0.99) as usize).min(sorted.len().saturating_sub(1)))
         .copied()
-        .unwrap_or(1.0);
+        .unwrap_or(1.0)
+}
+
+/// The magnitude of each rotation vector [rad].
+pub fn magnitudes(rotation: &[[f64; 3]]) -> Vec<f64> {
+    rotation
+        .iter()
+        .map(|r| (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt())
+        .collect()
+}
+
+/// Writes the rotation map of `s` (box length `box_x` along x) to `path`: its accumulated
+/// rotations, the colour scale from 0 to [`scale_top`] of them (labelled).
+pub fn rotation_map(path: &Path, title: &str, s: &Snapshot, box_x: f64) -> Result<()> {
+    let mag = magnitudes(&s.rotation);
+    let hi = scale_top(&mag);
+    draw(path, title, s, &mag, hi, box_x)
+}
+
+/// Writes the map of the rotations `mag` [rad] the particles of `s` (where they are in `s`)
+/// made over some interval, on the colour scale 0 ..= `hi` (e.g. one scale for the three
+/// stages of a run, so that their maps compare; the title says over what).
+pub fn draw(
+    path: &Path,
+    title: &str,
+    s: &Snapshot,
+    mag: &[f64],
+    hi: f64,
+    box_x: f64,
+) -> Result<()> {
     let plate_y: Vec<f64> = s.plates.iter().flatten().flatten().map(|n| n[1]).collect();
     let (y0, y1) = plate_y
         .iter()

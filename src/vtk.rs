@@ -152,11 +152,7 @@ fn plates_vtu(plates: &[Vec<[[f64; 3]; 3]>; 2], time: f64) -> Vec<u8> {
 
 /// Writes one native snapshot (particles and plates) into `dir` and rewrites `native.pvd`.
 pub fn write_snapshot(dir: &Path, s: &Snapshot, dt: f64) -> Result<()> {
-    let rot_mag: Vec<f64> = s
-        .rotation
-        .iter()
-        .map(|r| (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt())
-        .collect();
+    let rot_mag = crate::rotation_map::magnitudes(&s.rotation);
     let ids: Vec<i64> = (1..=s.x.len() as i64).collect();
     let time = s.step as f64 * dt;
     let (particles, plates) = snapshot_names("native", s.step);
@@ -293,94 +289,194 @@ pub fn convert_liggghts_snapshots(
     Ok(n)
 }
 
-/// The particle positions of a snapshot [`write_snapshot`] wrote, in id order. Nothing in
-/// it is trusted: the header must be this module's (little endian, UInt64 block headers,
-/// appended raw data), the `id` and `Points` arrays must lie inside the file with the lengths
-/// `NumberOfPoints` gives, the ids must be 1..=n in order and every coordinate finite.
-pub fn read_positions(path: &Path) -> Result<Vec<[f64; 3]>> {
-    let b = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let bad = |why: &str| {
+/// A `.vtu` [`vtu`] wrote, opened with nothing trusted: the header must be this module's
+/// (little endian, UInt64 block headers, appended raw data) and every array read must lie
+/// inside the file with the length its tuple count gives (checked arithmetic: an absurd count
+/// or offset is an error, not a wrap).
+struct Appended<'a> {
+    path: &'a Path,
+    head: &'a str,
+    data: &'a [u8],
+    points: usize,
+    cells: usize,
+}
+
+impl<'a> Appended<'a> {
+    fn bad(path: &Path, why: &str) -> Error {
         Error::invalid(
             "snapshot",
             path.display(),
             format!("a particle snapshot written by verify ({why})"),
         )
-    };
-    if !b.ends_with(b"\n</AppendedData>\n</VTKFile>\n") {
-        return Err(bad("it does not end as one does: cut short?"));
     }
-    let marker = b"<AppendedData encoding=\"raw\">\n_";
-    let start = b
-        .windows(marker.len())
-        .position(|w| w == marker)
-        .ok_or_else(|| bad("no appended raw data"))?;
-    let head = std::str::from_utf8(&b[..start]).map_err(|_| bad("its header is not text"))?;
-    if !head.contains(r#"byte_order="LittleEndian" header_type="UInt64""#) {
-        return Err(bad("not little endian with UInt64 block headers"));
+
+    fn parse(path: &'a Path, b: &'a [u8]) -> Result<Self> {
+        let bad = |why: &str| Self::bad(path, why);
+        if !b.ends_with(b"\n</AppendedData>\n</VTKFile>\n") {
+            return Err(bad("it does not end as one does: cut short?"));
+        }
+        let marker = b"<AppendedData encoding=\"raw\">\n_";
+        let start = b
+            .windows(marker.len())
+            .position(|w| w == marker)
+            .ok_or_else(|| bad("no appended raw data"))?;
+        let head = std::str::from_utf8(&b[..start]).map_err(|_| bad("its header is not text"))?;
+        if !head.contains(r#"byte_order="LittleEndian" header_type="UInt64""#) {
+            return Err(bad("not little endian with UInt64 block headers"));
+        }
+        let piece = head.split("<Piece ").nth(1);
+        let count = |name: &str| -> Result<usize> {
+            piece
+                .and_then(|t| Self::attr(t, name))
+                .and_then(|v| v.parse().ok())
+                .ok_or_else(|| bad(&format!("no {name}")))
+        };
+        Ok(Appended {
+            path,
+            head,
+            data: &b[start + marker.len()..],
+            points: count("NumberOfPoints")?,
+            cells: count("NumberOfCells")?,
+        })
     }
-    let data = &b[start + marker.len()..];
-    let attr = |tag: &str, name: &str| -> Option<String> {
+
+    fn attr(tag: &str, name: &str) -> Option<String> {
         let i = tag.find(&format!("{name}=\""))? + name.len() + 2;
         Some(tag[i..].split('"').next()?.to_string())
-    };
-    let n: usize = head
-        .split("<Piece ")
-        .nth(1)
-        .and_then(|t| attr(t, "NumberOfPoints"))
-        .and_then(|v| v.parse().ok())
-        .ok_or_else(|| bad("no NumberOfPoints"))?;
-    // the block of the array `name` of type `ty` with `comps` components: n * comps values
-    let block = |name: &str, ty: &str, comps: usize| -> Result<&[u8]> {
-        let tag = head
+    }
+
+    /// The 8-byte words of the array `name` of type `ty` (Int64 or Float64) with `comps`
+    /// components over `tuples` tuples.
+    fn words(&self, name: &str, ty: &str, comps: usize, tuples: usize) -> Result<Vec<[u8; 8]>> {
+        let bad = |why: &str| Self::bad(self.path, why);
+        let tag = self
+            .head
             .split("<DataArray ")
-            .find(|t| attr(t, "Name").as_deref() == Some(name))
+            .find(|t| Self::attr(t, "Name").as_deref() == Some(name))
             .ok_or_else(|| bad(&format!("no array {name}")))?;
-        let ok = attr(tag, "type").as_deref() == Some(ty)
-            && attr(tag, "NumberOfComponents").as_deref() == Some(&comps.to_string())
-            && attr(tag, "format").as_deref() == Some("appended");
-        let off: usize = attr(tag, "offset")
+        let ok = Self::attr(tag, "type").as_deref() == Some(ty)
+            && Self::attr(tag, "NumberOfComponents").as_deref() == Some(&comps.to_string())
+            && Self::attr(tag, "format").as_deref() == Some("appended");
+        let off: usize = Self::attr(tag, "offset")
             .and_then(|v| v.parse().ok())
             .filter(|_| ok)
             .ok_or_else(|| bad(&format!("array {name} is not {comps} x {ty}, appended")))?;
-        // sizes from the file: checked arithmetic (an absurd count is an error, not a wrap)
-        let len = n
+        let len = tuples
             .checked_mul(comps * 8)
             .ok_or_else(|| bad("NumberOfPoints out of range"))?;
         let (body, end) = off
             .checked_add(8)
             .and_then(|b| Some((b, b.checked_add(len)?)))
             .ok_or_else(|| bad(&format!("array {name}'s offset out of range")))?;
-        let size = data
+        let size = self
+            .data
             .get(off..body)
             .map(|h| u64::from_le_bytes(h.try_into().expect("8 bytes")));
         if size != Some(len as u64) {
             return Err(bad(&format!("array {name}'s block is not {len} bytes")));
         }
-        data.get(body..end)
-            .ok_or_else(|| bad(&format!("array {name} runs past the end")))
-    };
-    let words = |bytes: &[u8]| -> Vec<[u8; 8]> {
-        bytes
+        let bytes = self
+            .data
+            .get(body..end)
+            .ok_or_else(|| bad(&format!("array {name} runs past the end")))?;
+        Ok(bytes
             .chunks_exact(8)
             .map(|c| c.try_into().expect("8 bytes"))
-            .collect()
-    };
-    let ids = words(block("id", "Int64", 1)?);
-    if ids
-        .iter()
-        .enumerate()
-        .any(|(k, w)| i64::from_le_bytes(*w) != k as i64 + 1)
-    {
-        return Err(bad("its ids are not 1..=n in order"));
+            .collect())
     }
-    let coords: Vec<f64> = words(block("Points", "Float64", 3)?)
+
+    /// The finite Float64 array `name`, 3 components a point.
+    fn vectors(&self, name: &str, tuples: usize) -> Result<Vec<[f64; 3]>> {
+        let v = self.finite(name, 3, tuples)?;
+        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
+
+    fn finite(&self, name: &str, comps: usize, tuples: usize) -> Result<Vec<f64>> {
+        let v: Vec<f64> = self
+            .words(name, "Float64", comps, tuples)?
+            .into_iter()
+            .map(f64::from_le_bytes)
+            .collect();
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(Self::bad(
+                self.path,
+                &format!("a value of {name} is not finite"),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// The `id` array: 1..=n in order (the particles in id order).
+    fn ids_in_order(&self) -> Result<()> {
+        let ids = self.words("id", "Int64", 1, self.points)?;
+        if ids
+            .iter()
+            .enumerate()
+            .any(|(k, w)| i64::from_le_bytes(*w) != k as i64 + 1)
+        {
+            return Err(Self::bad(self.path, "its ids are not 1..=n in order"));
+        }
+        Ok(())
+    }
+}
+
+fn read(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::io(path, e))
+}
+
+/// The particle positions of a snapshot [`write_snapshot`] wrote, in id order. Nothing in
+/// it is trusted ([`Appended`]): the `id` and `Points` arrays must lie inside the file with
+/// the lengths `NumberOfPoints` gives, the ids must be 1..=n in order and every coordinate
+/// finite.
+pub fn read_positions(path: &Path) -> Result<Vec<[f64; 3]>> {
+    let b = read(path)?;
+    let f = Appended::parse(path, &b)?;
+    f.ids_in_order()?;
+    f.vectors("Points", f.points)
+}
+
+/// The whole native snapshot of `step` in `dir` as [`write_snapshot`] wrote it: the
+/// particles (positions, radii, velocities, spins, accumulated rotations; ids 1..=n in order,
+/// every value finite) and the plates' triangles (three points a triangle, the cell field
+/// `plate` 0 or 1). Nothing trusted, as [`read_positions`].
+pub fn read_snapshot(dir: &Path, step: u64) -> Result<Snapshot> {
+    let (particles, plates) = snapshot_names("native", step);
+    let path = dir.join(particles);
+    let b = read(&path)?;
+    let f = Appended::parse(&path, &b)?;
+    f.ids_in_order()?;
+    let n = f.points;
+    let radius = f.finite("radius", 1, n)?;
+    let (x, v) = (f.vectors("Points", n)?, f.vectors("velocity", n)?);
+    let (omega, rotation) = (f.vectors("omega", n)?, f.vectors("rotation", n)?);
+    let path = dir.join(plates);
+    let b = read(&path)?;
+    let f = Appended::parse(&path, &b)?;
+    if f.points != 3 * f.cells {
+        return Err(Appended::bad(&path, "three points a triangle"));
+    }
+    let corners = f.vectors("Points", f.points)?;
+    let mut tris: [Vec<[[f64; 3]; 3]>; 2] = [Vec::new(), Vec::new()];
+    for (w, t) in f
+        .words("plate", "Int64", 1, f.cells)?
         .into_iter()
-        .map(f64::from_le_bytes)
-        .collect();
-    if coords.iter().any(|v| !v.is_finite()) {
-        return Err(bad("a position is not finite"));
+        .zip(corners.chunks_exact(3))
+    {
+        let k = usize::try_from(i64::from_le_bytes(w))
+            .ok()
+            .filter(|k| *k < 2)
+            .ok_or_else(|| Appended::bad(&path, "a plate is 0 or 1"))?;
+        tris[k].push([t[0], t[1], t[2]]);
     }
-    Ok(coords.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    Ok(Snapshot {
+        step,
+        x,
+        v,
+        omega,
+        radius,
+        rotation,
+        plates: tris,
+    })
 }
 
 #[cfg(test)]
@@ -440,6 +536,52 @@ mod tests {
         // the plates' file holds no particles
         let e = read_positions(&dir.path().join("native_plates_000000007.vtu")).unwrap_err();
         assert!(e.to_string().contains("no array id"), "{e}");
+    }
+
+    /// [`read_snapshot`] gives back every field [`write_snapshot`] wrote, bit for bit, the
+    /// plates' triangles each to its plate; a plate index other than 0 or 1 is refused.
+    #[test]
+    fn a_whole_snapshot_reads_back_bit_for_bit() {
+        let t = |k: f64| [[k, 0.0, 0.0], [1.0, k, 0.0], [0.0, 0.0, 1.0 / 3.0]];
+        let s = Snapshot {
+            step: 42,
+            x: vec![[0.1, 1.0, 2.0], [3.0, -4.5, 5.0e-300]],
+            v: vec![[1e-9, -2.0, 3.5], [0.0, -0.0, 7.0]],
+            omega: vec![[4.0, 5.0, 6.0], [-1.0, 1.0 / 7.0, 0.0]],
+            radius: vec![0.1, 0.2],
+            rotation: vec![[0.0, 3.0, 4.0], [1e3, -2.0, 0.5]],
+            plates: [vec![t(0.0), t(1.0)], vec![t(2.0)]],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        write_snapshot(dir.path(), &s, 1e-3).unwrap();
+        let r = read_snapshot(dir.path(), 42).unwrap();
+        let bits =
+            |v: &[[f64; 3]]| -> Vec<u64> { v.iter().flatten().map(|x| x.to_bits()).collect() };
+        for (a, b) in [
+            (&r.x, &s.x),
+            (&r.v, &s.v),
+            (&r.omega, &s.omega),
+            (&r.rotation, &s.rotation),
+        ] {
+            assert_eq!(bits(a), bits(b));
+        }
+        assert_eq!(r.radius, s.radius);
+        assert_eq!(r.plates, s.plates);
+        assert_eq!(r.step, 42);
+        let plates = dir.path().join("native_plates_000000042.vtu");
+        let mut b = std::fs::read(&plates).unwrap();
+        // the cell array `plate` (0, 0, 1) is the first block: its third value made 2
+        let marker = b"<AppendedData encoding=\"raw\">\n_";
+        let data = b.windows(marker.len()).position(|w| w == marker).unwrap() + marker.len();
+        let at = data + 8 + 16;
+        assert_eq!(b[at..at + 8], 1i64.to_le_bytes());
+        b[at..at + 8].copy_from_slice(&2i64.to_le_bytes());
+        std::fs::write(&plates, &b).unwrap();
+        let e = read_snapshot(dir.path(), 42).unwrap_err().to_string();
+        assert!(
+            e.contains("a plate is 0 or 1") && e.contains("native_plates_000000042"),
+            "{e}"
+        );
     }
 
     #[test]

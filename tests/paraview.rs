@@ -122,8 +122,8 @@ fn snapshots_load_in_vtk_with_their_fields_count_and_time() {
 
 /// `verify profile` on a native ci run with snapshots in its steady window: the profile from
 /// grain displacements is written, the toothed plates grip (slip well under the plate speed)
-/// and the gouge shears (the bottom layer faster than the top one); a snapshot cut short is
-/// an error naming it, not a profile.
+/// and the gouge shears (the bottom layer faster than the top one), with the stage's rotation
+/// map; a snapshot cut short is an error naming it, not a profile.
 #[test]
 fn displacement_profile_from_the_snapshots_of_a_run() {
     let dir = tempfile::tempdir().unwrap();
@@ -153,6 +153,14 @@ fn displacement_profile_from_the_snapshots_of_a_run() {
     }
     assert!(seed.join("displacement_profile.svg").is_file());
     assert!(t.contains("slip bottom") && t.contains("band width"), "{t}");
+    // and the stage's rotation map: one disc and its outline a grain, over the window
+    let map = std::fs::read_to_string(seed.join("rotation_map_stage1.svg")).unwrap();
+    let case: toml::Value =
+        toml::from_str(&std::fs::read_to_string(seed.join("case.toml")).unwrap()).unwrap();
+    let n = case["particles"].as_integer().unwrap() as usize;
+    assert_eq!(map.matches("<circle").count(), 2 * n);
+    assert!(map.contains("stage 1") && map.contains("rotation over steps"));
+    assert!(t.contains("1 stage rotation map(s)"), "{t}");
     // a stage with no snapshots in its steady window (as a run resumed on another machine
     // from a carried checkpoint has for the stages before it): no profile for it, said, and
     // the others' still made

@@ -189,6 +189,14 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
         "{}",
         text(&o)
     );
+    // a stage's rotation map as `verify profile` writes it from a run's snapshots (this
+    // sweep writes none: the run's own map stands in for its file)
+    let seed1 = out.join("runs/mur1_etar0.5_s1/seed1");
+    std::fs::copy(
+        seed1.join("rotation_map.svg"),
+        seed1.join("rotation_map_stage1.svg"),
+    )
+    .unwrap();
     let o = verify(&[
         "sweep",
         "report",
@@ -227,6 +235,8 @@ fn reduced_sweep_runs_both_codes_resumes_and_reports() {
         "on stable or converged numbers: each point",
         "Rotation maps",
         "rotation_map.svg",
+        "runs/mur1_etar0.5_s1/seed1/rotation_map_stage1.svg",
+        "stage 1, its steady window",
         "judged from",
     ] {
         assert!(html.contains(part), "the report lacks {part:?}");

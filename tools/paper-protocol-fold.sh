@@ -6,7 +6,8 @@
 # results), summary.json and figures; per seed its case, velocity profiles, run records
 # (<code>_run.json), rotation map and series (<code>.csv.gz: gzip -n, checked against the
 # SHA-256 its run record holds before it is kept), its steady profiles from the grains'
-# displacements between snapshots (`verify profile`, where snapshots are there); per
+# displacements between snapshots and its stages' rotation maps (`verify profile`, where
+# snapshots are there); per
 # convergence study each finished run's series and input hash (as each finishes: run the fold
 # before the end-of-session carry when one has), and its summary and figures. Never
 # checkpoints, restart files or ParaView snapshots. A run folded before is checked again (its
@@ -70,6 +71,11 @@ fold_seed() { # SEED-DIR DEST
   for f in case.toml rotation_map.svg native_displacement_profile.csv \
     native_displacement_profile.json displacement_profile.svg; do
     [ -f "$seed/$f" ] && cp "$seed/$f" "$dest/"
+  done
+  # the stages' rotation maps `verify profile` drew from the snapshots (the rotation over
+  # each stage's steady window)
+  for f in "$seed"/rotation_map_stage*.svg; do
+    [ -f "$f" ] && cp "$f" "$dest/"
   done
   return 0
 }

@@ -91,9 +91,10 @@ pub enum Command {
     /// grain's displacement between snapshots over each stage's steady window (x unwrapped
     /// across the periodic side), layers, slip at both plates and band width with 95 % CIs over
     /// 10 blocks, where 20 velocity samples cannot resolve them (at the paper's speeds a
-    /// grain's velocity fluctuates 20-40 times the plate's).
+    /// grain's velocity fluctuates 20-40 times the plate's); and per stage the paper's rotation
+    /// map of the rotation each grain made over the steady window (one colour scale a run).
     #[command(after_help = "Examples:\n  \
-        verify profile runs/shear-x/seed1      # writes native_displacement_profile.{csv,json}, displacement_profile.svg\n\n\
+        verify profile runs/shear-x/seed1      # writes native_displacement_profile.{csv,json}, displacement_profile.svg, rotation_map_stage<k>.svg\n\n\
         DIR holds case.toml, native.csv and vtk/native_*.vtu (a run with snapshots). \
         Exit status: 0 written, 2 error.")]
     Profile { dir: PathBuf },

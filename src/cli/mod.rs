@@ -37,7 +37,7 @@ pub fn run(cli: Cli) -> Result<Verdict> {
         Command::Convergence(a) => convergence::convergence(a),
         Command::Run(a) => study::run_study(a, execute),
         Command::Profile { dir } => {
-            let profiles = crate::run::displacement::run(&dir)?;
+            let (profiles, maps) = crate::run::displacement::run(&dir)?;
             crate::report::shear::displacement_plot(
                 &dir.join("displacement_profile.svg"),
                 &profiles,
@@ -56,8 +56,9 @@ pub fn run(cli: Cli) -> Result<Verdict> {
                 );
             }
             println!(
-                "profiles: {}",
-                dir.join("native_displacement_profile.csv").display()
+                "profiles: {}; {maps} stage rotation map(s): {}",
+                dir.join("native_displacement_profile.csv").display(),
+                dir.join("rotation_map_stage<k>.svg").display()
             );
             Ok(Verdict::Done)
         }

@@ -1105,31 +1105,49 @@ fn displacement_profiles(page: &mut Page, m: &Manifest, dir: &Path) {
     }
 }
 
-/// The paper's rotation maps (its Figs 8-11): seed 1 of each point, as each run drew it.
+/// The paper's rotation maps (its Figs 8-11): seed 1 of each point, as each run drew it at
+/// its end, and stage by stage where `verify profile` made them from the snapshots (the
+/// rotation over each stage's steady window: `seed1/rotation_map_stage<k>.svg`).
 fn rotation_maps(page: &mut Page, m: &Manifest, dir: &Path) {
-    let maps: Vec<(String, String)> = m
+    let maps: Vec<(String, Vec<(String, String)>)> = m
         .runs
         .iter()
         .filter(|r| r.seed == 1)
         .filter_map(|r| {
-            let rel = format!("runs/{}/seed1/rotation_map.svg", r.id);
-            dir.join(&rel)
-                .is_file()
-                .then(|| (format!("mu_r {}, eta_r {}", r.mu_r, r.eta_r), rel))
+            let seed = format!("runs/{}/seed1", r.id);
+            let mut figs = Vec::new();
+            let whole = format!("{seed}/rotation_map.svg");
+            if dir.join(&whole).is_file() {
+                figs.push(("the whole run, at its end".to_string(), whole));
+            }
+            for k in 1.. {
+                let rel = format!("{seed}/rotation_map_stage{k}.svg");
+                if !dir.join(&rel).is_file() {
+                    break;
+                }
+                figs.push((format!("stage {k}, its steady window"), rel));
+            }
+            (!figs.is_empty()).then(|| (format!("mu_r {}, eta_r {}", r.mu_r, r.eta_r), figs))
         })
         .collect();
     if !maps.is_empty() {
         page.heading("rotation", "Rotation maps");
         page.para(
-            "Particles seen along z, coloured by their accumulated rotation at the end of the \
-             run (seed 1 of each point; the paper's Figs 8-11). Each opens at full size.",
+            "Particles seen along z (seed 1 of each point; the paper's Figs 8-11), coloured by \
+             their accumulated rotation at the end of the run, and, where the run's snapshots \
+             gave them, by the rotation each grain made over each stage's steady window (the \
+             same strain at every speed; one colour scale for a run's stages, so that they \
+             compare). Each opens at full size.",
         );
         page.push(html! {
-            div.plots {
-                @for (label, rel) in &maps {
-                    figure {
-                        a href=(rel) { img src=(rel) alt=(label) style="max-width: 280px"; }
-                        figcaption { (label) }
+            @for (point, figs) in &maps {
+                h3 { (point) }
+                div.plots {
+                    @for (label, rel) in figs {
+                        figure {
+                            a href=(rel) { img src=(rel) alt=(format!("{point}: {label}")) style="max-width: 280px"; }
+                            figcaption { (label) }
+                        }
                     }
                 }
             }

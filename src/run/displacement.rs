@@ -3,7 +3,10 @@
 //! velocity samples cannot resolve them: at the paper's 0.1-1 mm/s a grain's velocity
 //! fluctuates 20-40 times the plate speed. DIR is a run's seed folder: its `case.toml`, its
 //! series `native.csv` (the top plate's height at each snapshot) and `vtk/native_*.vtu`.
-//! Writes `DIR/native_displacement_profile.{csv,json}` (atomically).
+//! Writes `DIR/native_displacement_profile.{csv,json}` (atomically), and the paper's rotation
+//! maps (its Figs 8-11) stage by stage: the rotation each grain made over each stage's steady
+//! window ([`stage_rotation_maps`]), where the map the run wrote at its end sums the whole
+//! run's (compaction and all three speeds).
 
 use crate::error::{Error, Result};
 use crate::fsutil::{read_to_string, write_atomic};
@@ -54,8 +57,9 @@ const LEAST_SNAPSHOTS: usize = 3;
 /// (its second half, as the steady mu's): written to DIR and returned. A stage with fewer
 /// than [`LEAST_SNAPSHOTS`] there (a run resumed on another machine from a carried
 /// checkpoint, whose earlier snapshots stayed behind) has none, said as a note; a run with
-/// none in any stage is an error.
-pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
+/// none in any stage is an error. Also the stages' rotation maps: returns the profiles and
+/// the number of maps.
+pub fn run(dir: &Path) -> Result<(Vec<VelocityProfile>, usize)> {
     let case: ShearCase = toml::from_str(&read_to_string(&dir.join("case.toml"))?)
         .map_err(|e| Error::invalid("case.toml", dir.display(), e.to_string()))?;
     case.validate(true)?;
@@ -122,6 +126,7 @@ pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
             dir: vtk,
         });
     }
+    let maps = stage_rotation_maps(dir, &case, &steps)?;
     write_atomic(
         &dir.join("native_displacement_profile.csv"),
         csv(&profiles).as_bytes(),
@@ -130,5 +135,153 @@ pub fn run(dir: &Path) -> Result<Vec<VelocityProfile>> {
         &dir.join("native_displacement_profile.json"),
         serde_json::to_string_pretty(&profiles)?.as_bytes(),
     )?;
-    Ok(profiles)
+    Ok((profiles, maps))
+}
+
+/// Per stage, `DIR/rotation_map_stage<k>.svg`: each grain's rotation over the stage's steady
+/// window (the magnitude of the difference of its accumulated rotation vector, the integral of
+/// omega dt, between the window's first and last snapshots), drawn where the grains are at the
+/// last. The same colour scale for every stage of the run (the largest of the stages' 99th
+/// percentiles): the windows are the same strain (half of a stage's 100 %), so the maps compare
+/// the speeds. A stage with fewer than two snapshots in its window has none, said as a note.
+/// Returns the number of maps written.
+fn stage_rotation_maps(dir: &Path, case: &ShearCase, steps: &[u64]) -> Result<usize> {
+    let vtk = dir.join("vtk");
+    let ends = case.run_ends();
+    let mut maps = Vec::new();
+    for k in 0..case.stages.len() {
+        let (a, b) = steady_window(ends[k], ends[k + 1]);
+        let window: Vec<u64> = steps
+            .iter()
+            .copied()
+            .filter(|s| (a..=b).contains(s))
+            .collect();
+        let (Some(&first), Some(&last)) = (window.first(), window.last()) else {
+            continue;
+        };
+        if first == last {
+            super::tell::note(&format!(
+                "stage {}: one snapshot in its steady window (steps {a}-{b}): no rotation map",
+                k + 1
+            ));
+            continue;
+        }
+        let (s0, s1) = (
+            crate::vtk::read_snapshot(&vtk, first)?,
+            crate::vtk::read_snapshot(&vtk, last)?,
+        );
+        if s0.x.len() != case.particles || s1.x.len() != case.particles {
+            return Err(Error::invalid(
+                "snapshot",
+                vtk.display(),
+                format!("{} particles, as case.toml says", case.particles),
+            ));
+        }
+        let turned: Vec<[f64; 3]> = s0
+            .rotation
+            .iter()
+            .zip(&s1.rotation)
+            .map(|(r0, r1)| [r1[0] - r0[0], r1[1] - r0[1], r1[2] - r0[2]])
+            .collect();
+        let mag = crate::rotation_map::magnitudes(&turned);
+        maps.push((k, first, s1, mag));
+    }
+    let hi = maps
+        .iter()
+        .map(|m| crate::rotation_map::scale_top(&m.3))
+        .fold(0.0, f64::max);
+    for (k, first, s, mag) in &maps {
+        crate::rotation_map::draw(
+            &dir.join(format!("rotation_map_stage{}.svg", k + 1)),
+            &format!(
+                "native, mu_r {}, eta_r {}, seed {}, stage {} ({} m/s): rotation over steps {}-{}",
+                case.material.rolling_friction,
+                case.material.rolling_damping,
+                case.seed,
+                k + 1,
+                case.stages[*k].speed,
+                first,
+                s.step
+            ),
+            s,
+            mag,
+            hi,
+            case.box_x,
+        )?;
+    }
+    Ok(maps.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::contact::models::RollingModel;
+    use crate::solver::shear::observe::Snapshot;
+    use crate::spec::shear::Preset;
+
+    /// A stage's map is the rotation each grain made between its steady window's first and
+    /// last snapshots (the difference of the accumulated vectors, not the run's total), on
+    /// one colour scale (the 99th percentile), titled with the steps; a snapshot outside the
+    /// window is not read; a snapshot of another sample is an error.
+    #[test]
+    fn a_stage_map_is_the_rotation_over_its_steady_window() {
+        let case = ShearCase::preset(Preset::Ci, RollingModel::Epsd, 0.5, 0.5, 1).unwrap();
+        let n = case.particles;
+        let ends = case.run_ends();
+        let (a, b) = steady_window(ends[0], ends[1]);
+        let tri = [[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [0.0, 0.0, 1e-3]];
+        let snap = |step, rot: &dyn Fn(usize) -> [f64; 3]| Snapshot {
+            step,
+            x: (0..n)
+                .map(|i| [case.box_x * (i as f64 + 0.5) / n as f64, 1e-3, 0.0])
+                .collect(),
+            v: vec![[0.0; 3]; n],
+            omega: vec![[0.0; 3]; n],
+            radius: vec![2e-5; n],
+            rotation: (0..n).map(rot).collect(),
+            plates: [vec![tri], vec![tri]],
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let vtk = dir.path().join("vtk");
+        std::fs::create_dir(&vtk).unwrap();
+        // grain i turned 1000 rad before the window, then i / n rad about z within it
+        let before = |i: usize| [1000.0, i as f64, 0.0];
+        let within = |i: usize| [1000.0, i as f64, i as f64 / n as f64];
+        for (step, rot) in [
+            (a - 1, &before as &dyn Fn(usize) -> [f64; 3]),
+            (a, &before),
+            (b, &within),
+        ] {
+            crate::vtk::write_snapshot(&vtk, &snap(step, rot), case.dt).unwrap();
+        }
+        // the snapshot before the window is damaged: it must not be read
+        std::fs::write(vtk.join(crate::vtk::snapshot_names("native", a - 1).0), "x").unwrap();
+        let steps = [a - 1, a, b];
+        assert_eq!(stage_rotation_maps(dir.path(), &case, &steps).unwrap(), 1);
+        let t = std::fs::read_to_string(dir.path().join("rotation_map_stage1.svg")).unwrap();
+        assert!(t.contains(&format!("rotation over steps {a}-{b}")), "{t}");
+        assert_eq!(t.matches("<circle").count(), 2 * n);
+        // the scale's top: the 99th percentile of i / n, not of the 1000 rad before
+        let hi = crate::rotation_map::scale_top(
+            &(0..n).map(|i| i as f64 / n as f64).collect::<Vec<_>>(),
+        );
+        assert!(
+            t.contains(&format!("\n{hi:.2}\n")) && !t.contains("\n1000"),
+            "{t}"
+        );
+        // the last snapshot of another sample
+        let mut other = snap(b, &within);
+        for f in [
+            &mut other.x,
+            &mut other.v,
+            &mut other.omega,
+            &mut other.rotation,
+        ] {
+            f.pop();
+        }
+        other.radius.pop();
+        crate::vtk::write_snapshot(&vtk, &other, case.dt).unwrap();
+        let e = stage_rotation_maps(dir.path(), &case, &steps).unwrap_err();
+        assert!(e.to_string().contains(&format!("{n} particles")), "{e}");
+    }
 }
