@@ -159,7 +159,11 @@ fn displacement_profile_from_the_snapshots_of_a_run() {
         toml::from_str(&std::fs::read_to_string(seed.join("case.toml")).unwrap()).unwrap();
     let n = case["particles"].as_integer().unwrap() as usize;
     assert_eq!(map.matches("<circle").count(), 2 * n);
-    assert!(map.contains("stage 1") && map.contains("rotation over steps"));
+    assert!(
+        map.contains("stage 1")
+            && map.contains("rotation over steps")
+            && map.contains("99 % under")
+    );
     assert!(t.contains("1 stage rotation map(s)"), "{t}");
     // a stage with no snapshots in its steady window (as a run resumed on another machine
     // from a carried checkpoint has for the stages before it): no profile for it, said, and

@@ -143,7 +143,9 @@ pub fn run(dir: &Path) -> Result<(Vec<VelocityProfile>, usize)> {
 /// omega dt, between the window's first and last snapshots), drawn where the grains are at the
 /// last. The same colour scale for every stage of the run (the largest of the stages' 99th
 /// percentiles): the windows are the same strain (half of a stage's 100 %), so the maps compare
-/// the speeds. A stage with fewer than two snapshots in its window has none, said as a note.
+/// the speeds; each title gives its own stage's 99th percentile (a stage far below the scale's
+/// top, washed out on it, still says how far it turned). A stage with fewer than two
+/// snapshots in its window has none, said as a note.
 /// Returns the number of maps written.
 fn stage_rotation_maps(dir: &Path, case: &ShearCase, steps: &[u64]) -> Result<usize> {
     let vtk = dir.join("vtk");
@@ -194,14 +196,16 @@ fn stage_rotation_maps(dir: &Path, case: &ShearCase, steps: &[u64]) -> Result<us
         crate::rotation_map::draw(
             &dir.join(format!("rotation_map_stage{}.svg", k + 1)),
             &format!(
-                "native, mu_r {}, eta_r {}, seed {}, stage {} ({} m/s): rotation over steps {}-{}",
+                "stage {} ({} m/s), mu_r {}, eta_r {}, seed {}: rotation over steps {}-{}, \
+                 99 % under {:.3} rad",
+                k + 1,
+                case.stages[*k].speed,
                 case.material.rolling_friction,
                 case.material.rolling_damping,
                 case.seed,
-                k + 1,
-                case.stages[*k].speed,
                 first,
-                s.step
+                s.step,
+                crate::rotation_map::scale_top(mag)
             ),
             s,
             mag,
@@ -266,7 +270,9 @@ mod tests {
             &(0..n).map(|i| i as f64 / n as f64).collect::<Vec<_>>(),
         );
         assert!(
-            t.contains(&format!("\n{hi:.2}\n")) && !t.contains("\n1000"),
+            t.contains(&format!("\n{hi:.2}\n"))
+                && !t.contains("\n1000")
+                && t.contains(&format!("99 % under {hi:.3} rad")),
             "{t}"
         );
         // the last snapshot of another sample
