@@ -49,6 +49,23 @@ fn top_y_at(series: &Series, col: usize, step: u64) -> Option<f64> {
     }
 }
 
+/// Each stage's index, steady window (its second half, as the steady mu's) and the snapshot
+/// steps in it.
+fn stage_windows(case: &ShearCase, steps: &[u64]) -> Vec<(usize, (u64, u64), Vec<u64>)> {
+    let ends = case.run_ends();
+    (0..case.stages.len())
+        .map(|k| {
+            let (a, b) = steady_window(ends[k], ends[k + 1]);
+            let window = steps
+                .iter()
+                .copied()
+                .filter(|s| (a..=b).contains(s))
+                .collect();
+            (k, (a, b), window)
+        })
+        .collect()
+}
+
 /// A displacement profile needs this many snapshots in its stage's steady window (two
 /// intervals: [`displacement_profile`]'s least).
 const LEAST_SNAPSHOTS: usize = 3;
@@ -73,15 +90,8 @@ pub fn run(dir: &Path) -> Result<(Vec<VelocityProfile>, usize)> {
     })?;
     let vtk = dir.join("vtk");
     let steps = snapshot_steps(&vtk)?;
-    let ends = case.run_ends();
     let mut profiles = Vec::new();
-    for k in 0..case.stages.len() {
-        let (a, b) = steady_window(ends[k], ends[k + 1]);
-        let window: Vec<u64> = steps
-            .iter()
-            .copied()
-            .filter(|s| (a..=b).contains(s))
-            .collect();
+    for (k, (a, b), window) in stage_windows(&case, &steps) {
         if window.len() < LEAST_SNAPSHOTS {
             super::tell::note(&format!(
                 "stage {} ({} m/s): {} snapshot(s) in its steady window (steps {a}-{b}), \
@@ -149,15 +159,8 @@ pub fn run(dir: &Path) -> Result<(Vec<VelocityProfile>, usize)> {
 /// Returns the number of maps written.
 fn stage_rotation_maps(dir: &Path, case: &ShearCase, steps: &[u64]) -> Result<usize> {
     let vtk = dir.join("vtk");
-    let ends = case.run_ends();
     let mut maps = Vec::new();
-    for k in 0..case.stages.len() {
-        let (a, b) = steady_window(ends[k], ends[k + 1]);
-        let window: Vec<u64> = steps
-            .iter()
-            .copied()
-            .filter(|s| (a..=b).contains(s))
-            .collect();
+    for (k, (a, b), window) in stage_windows(case, steps) {
         let (Some(&first), Some(&last)) = (window.first(), window.last()) else {
             continue;
         };
