@@ -52,6 +52,37 @@ pub fn start() -> Start {
 #[cfg(feature = "mpi")]
 pub use mpi_ranks::{finish, hand_out, next_work, world, Job, Work};
 
+/// The split of every native run of this process into bricks that the command line chose
+/// (`--bricks`), if it did.
+static BRICKS: std::sync::Mutex<Option<[usize; 3]>> = std::sync::Mutex::new(None);
+
+/// Chooses how every native run of this process is split into bricks (`--bricks NXxNYxNZ`:
+/// along x, across the gap, along z; as LAMMPS' `processors`): refused unless their product
+/// is the rank count. Whether each slab is wider than the ghost cut is checked against each
+/// run's box (`decompose::split_as`).
+pub fn choose_bricks(n: [usize; 3]) -> crate::error::Result<()> {
+    let ranks = native_ranks();
+    if n.iter().product::<usize>() != ranks {
+        let alone = if ranks == 1 {
+            " (one process: start it under `mpirun -np N`, built with the `mpi` feature)"
+        } else {
+            ""
+        };
+        return Err(crate::error::Error::invalid(
+            "--bricks",
+            format!("{}x{}x{}", n[0], n[1], n[2]),
+            format!("NXxNYxNZ whose product is the rank count, {ranks}{alone}"),
+        ));
+    }
+    *BRICKS.lock().unwrap_or_else(|e| e.into_inner()) = Some(n);
+    Ok(())
+}
+
+/// The split [`choose_bricks`] chose, if any.
+pub fn chosen_bricks() -> Option<[usize; 3]> {
+    *BRICKS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The ranks a native run of this process is decomposed over: the world's size under
 /// `mpirun` (the `mpi` feature), else 1.
 pub fn native_ranks() -> usize {
@@ -96,6 +127,8 @@ mod mpi_ranks {
         pub first_stage: usize,
         /// Threads per rank (rank 0's pool).
         pub threads: usize,
+        /// The split into bricks along x, across the gap and along z (rank 0's choice).
+        pub bricks: [usize; 3],
     }
 
     /// What rank 0 hands every rank.

@@ -328,13 +328,19 @@ fn step_native<R>(
     #[cfg(feature = "mpi")]
     if let Some(world) = crate::ranks::world() {
         use crate::ranks::{Job, Work};
-        use crate::solver::shear::decompose::{split_for, Brick, BrickRun, Transport};
+        use crate::solver::shear::decompose::{split_as, split_for, Brick, BrickRun, Transport};
+        // the split (`--bricks`, else the least boundary), checked before any rank starts
+        let bricks = match crate::ranks::chosen_bricks() {
+            Some(n) => split_as(n, &sim)?,
+            None => split_for(world.size(), &sim),
+        };
         let job = Job {
             case: case.clone(),
             packing: packing.clone(),
             sim,
             first_stage,
             threads: rayon::current_num_threads(),
+            bricks: [bricks.nx, bricks.ny, bricks.nz],
         };
         let work = match timing {
             Some(t) => Work::Bench(job, t),
@@ -344,12 +350,12 @@ fn step_native<R>(
         let (Work::Run(job) | Work::Bench(job, _)) = work else {
             unreachable!("a run or a bench was handed out")
         };
-        let bricks = split_for(world.size(), case.box_x, case.box_z);
         crate::run::tell::note(&format!(
-            "native run decomposed over {} MPI ranks: {} x {} bricks along x and z, {} \
-             thread(s) each",
+            "native run decomposed over {} MPI ranks: {} x {} x {} bricks along x, across \
+             the gap (y) and along z, {} thread(s) each",
             world.size(),
             bricks.nx,
+            bricks.ny,
             bricks.nz,
             job.threads
         ));
@@ -371,7 +377,7 @@ fn step_native<R>(
 #[cfg(feature = "mpi")]
 pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
     use crate::ranks::Work;
-    use crate::solver::shear::decompose::{probe_link, split_for, Brick, BrickRun, Transport};
+    use crate::solver::shear::decompose::{bricks_of, probe_link, Brick, BrickRun, Transport};
     while let Some(work) = crate::ranks::next_work(world) {
         let (job, timing) = match work {
             Work::Run(job) => (job, None),
@@ -381,7 +387,7 @@ pub fn serve(world: &crate::solver::shear::mpi::Mpi) {
                 continue;
             }
         };
-        let bricks = split_for(world.size(), job.case.box_x, job.case.box_z);
+        let bricks = bricks_of(job.bricks, &job.sim);
         let pool = match rayon::ThreadPoolBuilder::new()
             .num_threads(job.threads.max(1))
             .build()

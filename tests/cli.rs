@@ -118,6 +118,39 @@ fn a_build_without_mpi_refuses_to_run_as_several_ranks() {
     assert!(!dir.path().join("out").exists(), "it ran anyway");
 }
 
+/// `--bricks` (the split of a run over MPI ranks) in one process: anything but 1x1x1 is an
+/// error naming the field, the rank count and how to start ranks; a malformed split is
+/// refused by the parser; nothing is written.
+#[test]
+fn bricks_must_multiply_to_the_rank_count() {
+    for (bricks, says) in [
+        ("2x1x1", "rank count, 1 (one process"),
+        ("2x1", "expected NXxNYxNZ"),
+        ("0x1x1", "expected NXxNYxNZ"),
+        ("1x1x1;shell", "expected NXxNYxNZ"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("o");
+        let o = std::process::Command::new(common::verify_bin())
+            .args([
+                "--bricks",
+                bricks,
+                "shear",
+                "--preset",
+                "ci",
+                "--native-only",
+            ])
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bricks}");
+        let e = stderr(&o);
+        assert!(e.contains("--bricks") && e.contains(says), "{bricks}: {e}");
+        assert!(!out.exists(), "{bricks}: wrote {out:?}");
+    }
+}
+
 /// `verify bench --ranks 2` and `verify sweep --emit slurm --ranks-per-run 2` in a build
 /// without the `mpi` feature: an error naming the field and the feature, before any work.
 #[cfg(not(feature = "mpi"))]

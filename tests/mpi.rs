@@ -1,7 +1,8 @@
 //! One simulation over MPI ranks (issue #39): `mpirun -np N verify shear --native-only`
 //! writes one process's outputs byte for byte (rows, velocity profiles, ParaView snapshots,
-//! the rotation map) for 2 and 3 ranks, and a run killed on 2 ranks resumes on 3 from its
-//! checkpoint to the uninterrupted run's bytes. Built with the `mpi` feature (CI runs
+//! the rotation map) for 2 and 3 ranks (split across the gap, and along the periodic x), and
+//! a run killed on 2 ranks along x resumes on 3 across the gap from its checkpoint to the
+//! uninterrupted run's bytes. Built with the `mpi` feature (CI runs
 //! `cargo test --release --features mpi --test mpi`, with OpenMPI's `mpirun`).
 #![cfg(feature = "mpi")]
 
@@ -92,18 +93,44 @@ fn two_and_three_ranks_write_one_process_bytes() {
         &verify(&args.iter().map(String::as_str).collect::<Vec<_>>()),
         "one process",
     );
-    for np in [2, 3] {
-        let out = dir.path().join(format!("np{np}"));
-        let o = mpirun(np).args(case(&out)).output().unwrap();
+    // the default split (the least boundary: across the gap here) and 2 along the periodic x
+    // (ghosts and pairs across the periodic side between ranks)
+    for (np, bricks, split) in [
+        (2, None, "1 x 2 x 1"),
+        (2, Some("2x1x1"), "2 x 1 x 1"),
+        (3, None, "1 x 3 x 1"),
+    ] {
+        let out = dir
+            .path()
+            .join(format!("np{np}-{}", bricks.unwrap_or("default")));
+        let mut c = mpirun(np);
+        if let Some(b) = bricks {
+            c.args(["--bricks", b]);
+        }
+        let o = c.args(case(&out)).output().unwrap();
         ran(&o, &format!("{np} ranks"));
         let t = text(&o);
         assert!(
-            t.contains(&format!("decomposed over {np} MPI ranks")),
-            "{np} ranks: not decomposed: {t}"
+            t.contains(&format!("decomposed over {np} MPI ranks: {split} bricks")),
+            "{np} ranks: not decomposed as {split}: {t}"
         );
-        same_outputs(&one, &out, &format!("{np} ranks"));
-        eprintln!("{np} ranks: every output byte for byte one process's");
+        same_outputs(&one, &out, &format!("{np} ranks, {split}"));
+        eprintln!("{np} ranks ({split}): every output byte for byte one process's");
     }
+    // a split that is not the rank count's: an error naming the field, before any step
+    let out = dir.path().join("bad");
+    let o = mpirun(2)
+        .args(["--bricks", "3x1x1"])
+        .args(case(&out))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(
+        t.contains("`--bricks`: 3x1x1") && t.contains("rank count, 2"),
+        "{t}"
+    );
+    assert!(!out.join("seed1/native.csv").exists());
 }
 
 #[test]
@@ -115,8 +142,10 @@ fn a_run_killed_on_two_ranks_resumes_on_three_to_the_same_bytes() {
         &verify(&case(&one).iter().map(String::as_str).collect::<Vec<_>>()),
         "one process",
     );
-    // 2 ranks, stopped (SIGTERM to mpirun, which ends its ranks) once a checkpoint exists
+    // 2 ranks along x, stopped (SIGTERM to mpirun, which ends its ranks) once a checkpoint
+    // exists; resumed on 3 across the gap
     let mut child = mpirun(2)
+        .args(["--bricks", "2x1x1"])
         .args(case(&cut))
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -137,7 +166,7 @@ fn a_run_killed_on_two_ranks_resumes_on_three_to_the_same_bytes() {
     ran(&o, "resumed on 3 ranks");
     let t = text(&o);
     assert!(
-        t.contains("resumed from checkpoint at step") && t.contains("over 3 MPI ranks"),
+        t.contains("resumed from checkpoint at step") && t.contains("over 3 MPI ranks: 1 x 3 x 1"),
         "{t}"
     );
     same_outputs(&one, &cut, "killed on 2 ranks, resumed on 3");

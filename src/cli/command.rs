@@ -31,6 +31,23 @@ pub struct Cli {
     /// summary file the command wrote, parsed); everything else goes to stderr.
     #[arg(long, global = true)]
     pub json: bool,
+    /// Under `mpirun`: how each native run is split into bricks, NXxNYxNZ along x, across
+    /// the gap between the plates (y) and along z, their product the rank count (as LAMMPS'
+    /// `processors`). Default: the split with the least boundary between the bricks.
+    #[arg(long, global = true, value_name = "NXxNYxNZ", value_parser = parse_bricks)]
+    pub bricks: Option<[usize; 3]>,
+}
+
+/// `--bricks`: three whole numbers from 1 to 4096 joined by `x`.
+fn parse_bricks(s: &str) -> Result<[usize; 3], String> {
+    let n: Vec<Option<usize>> = s
+        .split('x')
+        .map(|v| v.trim().parse().ok().filter(|n| (1..=4096).contains(n)))
+        .collect();
+    match n[..] {
+        [Some(a), Some(b), Some(c)] => Ok([a, b, c]),
+        _ => Err("expected NXxNYxNZ, three whole numbers from 1 to 4096, e.g. 2x1x1".into()),
+    }
 }
 
 #[derive(Subcommand, Debug)]

@@ -94,6 +94,9 @@ pub fn execute(matches: &ArgMatches) -> Result<Verdict> {
         .map_err(|e| Error::invalid("command line", "", e.to_string()))?;
     // a bad DEM_VERIFY_MAX_KERNEL is refused here, before any solver reads it
     KernelPath::max_from_env()?;
+    if let Some(n) = cli.bricks {
+        crate::ranks::choose_bricks(n)?;
+    }
     let study = study::resolve(matches);
     let verdict = run(cli);
     if let (Some(study), Some(summary)) = (study, crate::run::summary_written()) {

@@ -96,7 +96,8 @@ impl Costs {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ScalePoint {
     pub ranks: usize,
-    pub bricks: (usize, usize),
+    /// Bricks along x, across the gap (y) and along z.
+    pub bricks: [usize; 3],
     /// Own particles of the fullest brick.
     pub particles_per_rank: usize,
     /// Ghosts over own particles, the brick with the most ghosts.
@@ -162,7 +163,7 @@ pub fn model(f: &Fit, link: Option<Link>) -> Scaling {
     let points = f
         .splits
         .iter()
-        .map(|(bricks, c)| point(c, bricks.nx, bricks.nz, costs, link, pairs_total))
+        .map(|(b, c)| point(c, [b.nx, b.ny, b.nz], costs, link, pairs_total))
         .collect();
     Scaling {
         particles: n,
@@ -177,8 +178,7 @@ pub fn model(f: &Fit, link: Option<Link>) -> Scaling {
 
 fn point(
     c: &Census,
-    nx: usize,
-    nz: usize,
+    bricks: [usize; 3],
     k: Costs,
     link: Option<Link>,
     pairs_total: usize,
@@ -188,9 +188,10 @@ fn point(
     let neighbours = if r == 1 {
         0.0
     } else {
-        // a brick's neighbours in a split of nx x nz (fewer where a side has one or two bricks)
+        // a brick's neighbours in a split of nx x ny x nz (fewer where an axis has one or two
+        // slabs; across the gap a middle slab's two, as along a periodic axis of 3 or more)
         let side = |n: usize| (n.min(3) - 1) as f64;
-        (side(nx) + 1.0) * (side(nz) + 1.0) - 1.0
+        bricks.iter().map(|&n| side(n) + 1.0).product::<f64>() - 1.0
     };
     let log_r = (r as f64).log2();
     // a lone brick exchanges nothing
@@ -235,7 +236,7 @@ fn point(
         .fold(0.0, f64::max);
     ScalePoint {
         ranks: r,
-        bricks: (nx, nz),
+        bricks,
         particles_per_rank: most(&c.own),
         ghost_fraction,
         pair_overhead: most(&c.pairs) as f64 / (pairs_total as f64 / r as f64),
@@ -270,7 +271,7 @@ pub fn table(s: &Scaling) -> Vec<String> {
         1e-9 / s.cluster.seconds_per_byte
     )];
     out.push(
-        "    ranks  bricks  particles/rank  ghosts/own  pair overhead  kB/step  msgs/step  \
+        "    ranks    bricks  particles/rank  ghosts/own  pair overhead  kB/step  msgs/step  \
          speedup here  cluster as built  cluster, all-to-all rebuilds (before)"
             .into(),
     );
@@ -283,10 +284,9 @@ pub fn table(s: &Scaling) -> Vec<String> {
             )
         };
         out.push(format!(
-            "    {:>5}  {:>2}x{:<3}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.1}  {:>12}  {:>16}  {:>37}",
+            "    {:>5}  {:>8}  {:>14}  {:>10.3}  {:>13.3}  {:>7.1}  {:>9.1}  {:>12}  {:>16}  {:>37}",
             p.ranks,
-            p.bricks.0,
-            p.bricks.1,
+            format!("{}x{}x{}", p.bricks[0], p.bricks[1], p.bricks[2]),
             p.particles_per_rank,
             p.ghost_fraction,
             p.pair_overhead,

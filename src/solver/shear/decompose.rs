@@ -293,8 +293,8 @@ pub fn censuses(s: &ShearSim, ranks: &[usize]) -> (Vec<(Bricks, Census)>, Vec<us
     let cut = s.ghost_cut();
     let (mut splits, mut thin) = (Vec::new(), Vec::new());
     for &r in ranks {
-        let b = split_for(r, s.box_.lx, s.box_.lz);
-        if b.lx / b.nx as f64 <= cut || b.lz / b.nz as f64 <= cut {
+        let b = split_for(r, s);
+        if b.narrowest() <= cut {
             thin.push(r);
         } else {
             let c = census(s, &b);
@@ -1268,18 +1268,83 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
     }
 }
 
-/// The split of a box `lx` x `lz` into `ranks` bricks with the least boundary between them
-/// (`nx lz + nz lx`, which the ghosts' count follows), nx x nz = ranks.
-pub fn split_for(ranks: usize, lx: f64, lz: f64) -> Bricks {
-    let (nx, nz) = (1..=ranks)
+/// The split of `s`'s box into `ranks` bricks ([`split_of`]: the plates' bases bound the gap,
+/// the ghost cut `2 r_max + skin`).
+pub fn split_for(ranks: usize, s: &ShearSim) -> Bricks {
+    split_of(
+        ranks,
+        s.box_.lx,
+        [s.bottom.base_y, s.top.base_y],
+        s.box_.lz,
+        s.ghost_cut(),
+    )
+}
+
+/// `n` equal bricks (along x, across the gap, along z) of `s`'s box, the gap's slabs over
+/// the plates' bases: the split every rank makes of a run rank 0 chose `n` for.
+pub fn bricks_of(n: [usize; 3], s: &ShearSim) -> Bricks {
+    Bricks::equal(n, s.box_.lx, [s.bottom.base_y, s.top.base_y], s.box_.lz)
+}
+
+/// A chosen split `n` (the command line's `--bricks`, as LAMMPS' `processors`) of `s`'s box,
+/// refused when a slab would not be wider than the ghost cut (it would hold ghosts from
+/// beyond its neighbours), the error naming how many slabs each axis takes.
+pub fn split_as(n: [usize; 3], s: &ShearSim) -> Result<Bricks> {
+    let b = bricks_of(n, s);
+    let cut = s.ghost_cut();
+    if b.narrowest() > cut {
+        return Ok(b);
+    }
+    let most = |l: f64| ((l / cut).ceil() as usize).saturating_sub(1).max(1);
+    Err(Error::invalid(
+        "--bricks",
+        format!("{}x{}x{}", n[0], n[1], n[2]),
+        format!(
+            "slabs wider than the ghost cut ({:.3} mm): at most {} x {} x {} for this box \
+             ({:.3} x {:.3} x {:.3} mm between the plates)",
+            cut * 1e3,
+            most(s.box_.lx),
+            most(s.top.base_y - s.bottom.base_y),
+            most(s.box_.lz),
+            s.box_.lx * 1e3,
+            (s.top.base_y - s.bottom.base_y) * 1e3,
+            s.box_.lz * 1e3
+        ),
+    ))
+}
+
+/// The split of a box `lx` x `lz`, the plates' bases at `ys`, into `ranks` = nx ny nz bricks
+/// with the least boundary between them: the area of the cuts, which the ghosts' count
+/// follows (nx planes of ly lz along the periodic x when nx > 1, none when 1; ny - 1 planes of
+/// lx lz across the gap; nz of lx ly along z when nz > 1), as LAMMPS' processor grid is the
+/// factorisation with the least surface (`ProcMap::onelevel_grid`). Among the splits whose
+/// slabs are all wider than `cut` when there is one (a thinner slab would hold ghosts from
+/// beyond its neighbours); the first of equal ones in (nx, ny) order.
+pub fn split_of(ranks: usize, lx: f64, ys: [f64; 2], lz: f64, cut: f64) -> Bricks {
+    let ly = ys[1] - ys[0];
+    let splits: Vec<[usize; 3]> = (1..=ranks)
         .filter(|nx| ranks.is_multiple_of(*nx))
-        .map(|nx| (nx, ranks / nx))
-        .min_by(|a, b| {
-            let cost = |(nx, nz): (usize, usize)| nx as f64 * lz + nz as f64 * lx;
-            cost(*a).total_cmp(&cost(*b))
+        .flat_map(|nx| {
+            let rest = ranks / nx;
+            (1..=rest)
+                .filter(move |ny| rest.is_multiple_of(*ny))
+                .map(move |ny| [nx, ny, rest / ny])
         })
-        .unwrap_or((1, 1));
-    Bricks::equal(nx, nz, lx, lz)
+        .collect();
+    let planes = |n: usize| if n > 1 { n as f64 } else { 0.0 };
+    let area = |&[nx, ny, nz]: &[usize; 3]| {
+        planes(nx) * ly * lz + (ny - 1) as f64 * lx * lz + planes(nz) * lx * ly
+    };
+    let wide = |[nx, ny, nz]: &&[usize; 3]| {
+        lx / *nx as f64 > cut && ly / *ny as f64 > cut && lz / *nz as f64 > cut
+    };
+    let least = |it: &mut dyn Iterator<Item = &[usize; 3]>| {
+        it.min_by(|a, b| area(a).total_cmp(&area(b))).copied()
+    };
+    let n = least(&mut splits.iter().filter(wide))
+        .or_else(|| least(&mut splits.iter()))
+        .unwrap_or([1, 1, 1]);
+    Bricks::equal(n, lx, ys, lz)
 }
 /// Brick [`Brick::of`]'s pairs: those of `global`'s list with an own member, in list order
 /// (increasing key: local order is id order), their histories with them; `ids` the brick's
@@ -1505,19 +1570,20 @@ mod tests {
     use crate::solver::team::on_threads;
     use crate::spec::shear::{Preset, ShearCase};
 
-    /// `global` run as `nx` x `nz` bricks (threads of this process, each with `threads`
+    /// `global` run as `nx` x `ny` x `nz` bricks (threads of this process, each with `threads`
     /// threads of its own; brick 0's time counting `slow` times in the balance): with
     /// `speed` a run's setup first, then `steps` steps; the whole state gathered, how many
     /// particles changed brick, and the bricks at the end.
     fn in_bricks(
         global: &ShearSim,
-        (nx, nz): (usize, usize),
+        n: [usize; 3],
         threads: usize,
         slow: f64,
         speed: Option<f64>,
         steps: u64,
     ) -> (ShearSim, u64, Bricks) {
-        let bricks = &Bricks::equal(nx, nz, global.box_.lx, global.box_.lz);
+        let ys = [global.bottom.base_y, global.top.base_y];
+        let bricks = &Bricks::equal(n, global.box_.lx, ys, global.box_.lz);
         let ends: Vec<(Option<ShearSim>, u64, Bricks)> = std::thread::scope(|scope| {
             let runs: Vec<_> = InProcess::group(bricks.count())
                 .into_iter()
@@ -1567,7 +1633,7 @@ mod tests {
     #[test]
     fn a_blown_up_particle_stops_every_brick_at_the_same_step() {
         let global = loose_ci_120();
-        let bricks = split_for(2, global.box_.lx, global.box_.lz);
+        let bricks = split_for(2, &global);
         let mut b = [0, 1].map(|r| Brick::of(&global, &bricks, r));
         // a particle of brick 0 that brick 1 does not hold as a ghost
         let l = (0..b[0].sim.ids.len())
@@ -1612,7 +1678,7 @@ mod tests {
     fn a_particle_beyond_the_neighbouring_bricks_stops_every_brick() {
         let global = loose_ci_120();
         let (lx, lz) = (global.box_.lx, global.box_.lz);
-        let bricks = Bricks::equal(4, 1, lx, lz);
+        let bricks = Bricks::equal([4, 1, 1], lx, [global.bottom.base_y, global.top.base_y], lz);
         let cut = global.ghost_cut();
         assert_eq!(
             bricks.near(0, cut),
@@ -1656,18 +1722,51 @@ mod tests {
         }
     }
 
-    /// Bricks split the longer side first: the least boundary between them.
+    /// The split with the least area of cuts among those whose slabs are wider than the
+    /// ghost cut: at the paper's 2,500 grains (4 x 2.4 mm, the plates' bases 4.7 mm apart)
+    /// across the gap first (one 4 x 2.4 mm plane for 2 bricks against two 4.7 x 2.4 mm ones
+    /// along x); at 250,000 (40 x 24 mm) along x, the longer periodic side; across a gap
+    /// thinner than two cuts never; when no split is wide enough, the least area.
     #[test]
     fn the_split_has_the_least_boundary() {
-        let split = |n| {
-            let b = split_for(n, 4.0, 2.4);
-            (b.nx, b.nz)
+        let cut = 0.35e-3;
+        let split = |r: usize, l: [f64; 2], gap: f64| {
+            let b = split_of(r, l[0] * 1e-3, [1e-3, (1.0 + gap) * 1e-3], l[1] * 1e-3, cut);
+            [b.nx, b.ny, b.nz]
         };
+        let paper = [1, 2, 3, 4, 6, 8, 16].map(|r| split(r, [4.0, 2.4], 4.7));
         assert_eq!(
-            [1, 2, 3, 4, 6, 7].map(split),
-            [(1, 1), (2, 1), (3, 1), (2, 2), (3, 2), (7, 1)]
+            paper,
+            [
+                [1, 1, 1],
+                [1, 2, 1],
+                [1, 3, 1],
+                [1, 4, 1],
+                [2, 3, 1],
+                [2, 4, 1],
+                [4, 4, 1]
+            ]
         );
-        assert_eq!(split_for(4, 2.0, 8.0).nz, 4);
+        let wide = [2, 4, 8, 256, 1024].map(|r| split(r, [40.0, 24.0], 4.7));
+        assert_eq!(
+            wide,
+            [[2, 1, 1], [4, 1, 1], [4, 1, 2], [16, 2, 8], [32, 2, 16]]
+        );
+        let thin = [2, 3, 8].map(|r| split(r, [4.0, 2.4], 0.5));
+        assert_eq!(thin, [[2, 1, 1], [3, 1, 1], [4, 1, 2]]);
+        assert_eq!(split(4, [2.0, 8.0], 0.5), [1, 1, 4]);
+        let b = split_of(4096, 4e-3, [1e-3, 5.7e-3], 2.4e-3, cut);
+        assert_eq!(b.count(), 4096);
+        assert!(b.narrowest() <= cut);
+        // a chosen split (`--bricks`) with a slab thinner than the cut: refused, saying how
+        // many slabs each axis takes
+        let s = loose_ci_120();
+        assert!(split_as([2, 1, 1], &s).is_ok());
+        let e = split_as([1, 1, 64], &s).unwrap_err().to_string();
+        assert!(
+            e.contains("`--bricks`: 1x1x64") && e.contains("at most"),
+            "{e}"
+        );
     }
 
     /// The scaling model's census counts what the bricks hold: for each split, each brick's
@@ -1709,8 +1808,9 @@ mod tests {
     /// The fast preset's 2,500 particles sheared 1,500 steps from a dense state (rebuilds,
     /// particles changing brick, plate contacts, both rolling dashpots): every bit of the
     /// state (particles, forces, rotations, pair list and histories, plate records and
-    /// candidates, plates, servo, rebuild state) that of one process, for 1, 2, 3 and 2 x 2
-    /// bricks on 1 and 2 threads each.
+    /// candidates, plates, servo, rebuild state) that of one process, for 1, 2 and 3 bricks
+    /// along x, 2 x 2 along x and z, 2 and 3 across the gap and 2 x 2 along x and across the
+    /// gap, on 1 and 2 threads each.
     #[test]
     fn bricks_give_one_process_bits_for_any_split_and_thread_count() {
         let (_, dense) = fast_dense();
@@ -1732,13 +1832,16 @@ mod tests {
             let reference = state_bytes(&one);
             // (brick 0's time counting 3 times: the cuts move towards it)
             for (split, threads, slow) in [
-                ((1, 1), 2, 1.0),
-                ((2, 1), 1, 1.0),
-                ((2, 1), 2, 1.0),
-                ((3, 1), 1, 1.0),
-                ((3, 1), 2, 3.0),
-                ((2, 2), 1, 1.0),
-                ((2, 2), 1, 3.0),
+                ([1, 1, 1], 2, 1.0),
+                ([2, 1, 1], 1, 1.0),
+                ([2, 1, 1], 2, 1.0),
+                ([3, 1, 1], 1, 1.0),
+                ([3, 1, 1], 2, 3.0),
+                ([2, 1, 2], 1, 1.0),
+                ([2, 1, 2], 1, 3.0),
+                ([1, 2, 1], 1, 1.0),
+                ([1, 3, 1], 2, 3.0),
+                ([2, 2, 1], 1, 3.0),
             ] {
                 let (got, moved, bricks) =
                     in_bricks(&fresh, split, threads, slow, Some(speed), steps);
@@ -1748,13 +1851,14 @@ mod tests {
                 );
                 // and what a run's outputs read of it
                 assert_eq!(format!("{:?}", got.record()), format!("{:?}", one.record()));
-                if split != (1, 1) {
+                if split != [1, 1, 1] {
                     assert!(moved > 0, "{model}: {split:?}: no particle changed brick");
                 }
                 if slow > 1.0 {
-                    let equal = Bricks::equal(split.0, split.1, bricks.lx, bricks.lz);
+                    let ys = [fresh.bottom.base_y, fresh.top.base_y];
+                    let equal = Bricks::equal(split, bricks.lx, ys, bricks.lz);
                     assert!(
-                        bricks.area_share(0) < 0.8 * equal.area_share(0),
+                        bricks.volume_share(0) < 0.8 * equal.volume_share(0),
                         "{model}: {split:?}: brick 0 counting 3 times kept {:?}",
                         bricks
                     );
@@ -1764,8 +1868,9 @@ mod tests {
         }
     }
 
-    /// A run stopped on 2 bricks and resumed on 3 from its checkpoint form (the gathered
-    /// state through the checkpoint's serialisation) ends with one process's bits.
+    /// A run stopped on 2 bricks (along x) and resumed on 3 (across the gap) from its
+    /// checkpoint form (the gathered state through the checkpoint's serialisation) ends with
+    /// one process's bits.
     #[test]
     fn a_run_stopped_on_two_bricks_resumes_on_three_to_the_same_bits() {
         let (c, dense) = fast_dense();
@@ -1779,10 +1884,10 @@ mod tests {
             }
             s
         });
-        let (half, _, _) = in_bricks(&fresh, (2, 1), 1, 1.0, Some(speed), 500);
+        let (half, _, _) = in_bricks(&fresh, [2, 1, 1], 1, 1.0, Some(speed), 500);
         let bytes = rmp_serde::to_vec(&half).unwrap();
         let resumed: ShearSim = rmp_serde::from_slice(&bytes).unwrap();
-        let (end, _, _) = in_bricks(&resumed, (3, 1), 1, 1.0, None, 700);
+        let (end, _, _) = in_bricks(&resumed, [1, 3, 1], 1, 1.0, None, 700);
         assert!(state_bytes(&end) == state_bytes(&one));
     }
 }

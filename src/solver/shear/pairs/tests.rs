@@ -298,7 +298,8 @@ fn pass_on(s: &ShearSim, ids: &[usize], path: KernelPath) -> (NeighborList, Vec<
 /// others within the cutoff of its brick (ghosts, periodic images included), in increasing
 /// id, lists their pairs itself and gets its own particles' sums and their pairs' histories
 /// bit for bit as one process does. Checked on a dense sheared state split into bricks of
-/// 2 and 3 along x, 2 along z and 2 x 2, on every kernel path this CPU runs.
+/// 2 and 3 along x, 2 along z, 2 x 2 along x and z, 2 and 3 across the gap and 2 x 2 along x
+/// and across the gap, on every kernel path this CPU runs.
 #[test]
 fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
     let base = sheared(RollingModel::Epsd, 1.0, 0.5);
@@ -315,12 +316,21 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
             .zip(&gnl.hist)
             .map(|(p, h)| (gkey(p), (*p, *h)))
             .collect();
-        for (nx, nz) in [(2usize, 1usize), (3, 1), (1, 2), (2, 2)] {
-            let bricks = super::super::bricks::Bricks::equal(nx, nz, base.box_.lx, base.box_.lz);
+        let ys = [base.bottom.base_y, base.top.base_y];
+        for [nx, ny, nz] in [
+            [2usize, 1, 1],
+            [3, 1, 1],
+            [1, 1, 2],
+            [2, 1, 2],
+            [1, 2, 1],
+            [1, 3, 1],
+            [2, 2, 1],
+        ] {
+            let bricks =
+                super::super::bricks::Bricks::equal([nx, ny, nz], base.box_.lx, ys, base.box_.lz);
             let mut owned_total = 0;
             let mut crossing = 0;
             for b in 0..bricks.count() {
-                let (rx, rz) = (b / nz, b % nz);
                 let (local, _) = bricks.members(b, &base.x, cut);
                 let owns = |q: usize| bricks.owner(base.x[q]) == b;
                 let (lnl, lacc) = pass_on(&base, &local, path);
@@ -335,7 +345,7 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
                     assert_eq!(
                         bits(&lacc[a]),
                         bits(&gacc[q]),
-                        "{path:?}, {nx}x{nz} bricks, brick ({rx}, {rz}): particle {q}"
+                        "{path:?}, {nx}x{ny}x{nz} bricks, brick {b}: particle {q}"
                     );
                 }
                 owned_total += mine;
@@ -358,10 +368,13 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
                     );
                 }
                 let expected = global.keys().filter(|&&(a, b)| owns(a) || owns(b)).count();
-                assert_eq!(listed, expected, "{nx}x{nz} brick ({rx}, {rz}): pairs");
+                assert_eq!(listed, expected, "{nx}x{ny}x{nz} brick {b}: pairs");
             }
             assert_eq!(owned_total, n, "every particle owned once");
-            assert!(crossing > 100, "{nx}x{nz}: {crossing} pairs across bricks");
+            assert!(
+                crossing > 100,
+                "{nx}x{ny}x{nz}: {crossing} pairs across bricks"
+            );
         }
         assert!(gacc.iter().any(|f| f.delta_f != [0.0; 3]));
         eprintln!(
@@ -387,8 +400,17 @@ fn plate_forces_summed_exactly_over_bricks_are_one_process_bits() {
     let bits = |f: (V3, V3)| (f.0.map(f64::to_bits), f.1.map(f64::to_bits));
     let with_candidates = |q: usize| s.wall_start[q] != s.wall_start[q + 1];
     let mut f64_differs = 0;
-    for (nx, nz) in [(1usize, 1usize), (2, 1), (3, 1), (2, 2), (4, 3)] {
-        let bricks = Bricks::equal(nx, nz, s.box_.lx, s.box_.lz);
+    let ys = [s.bottom.base_y, s.top.base_y];
+    for n in [
+        [1usize, 1, 1],
+        [2, 1, 1],
+        [3, 1, 1],
+        [2, 1, 2],
+        [4, 1, 3],
+        [1, 2, 1],
+        [2, 2, 1],
+    ] {
+        let bricks = Bricks::equal(n, s.box_.lx, ys, s.box_.lz);
         let shares: Vec<Vec<(V3, V3)>> = (0..bricks.count())
             .map(|b| {
                 (0..s.x.len())
@@ -405,7 +427,7 @@ fn plate_forces_summed_exactly_over_bricks_are_one_process_bits() {
             }
         }
         let total = PlateSum::from_limbs(&words).totals().unwrap();
-        assert_eq!(bits(total), bits(one), "{nx}x{nz}");
+        assert_eq!(bits(total), bits(one), "{n:?}");
         // the same terms summed in f64 brick by brick, then the bricks' sums
         let by_brick = shares
             .iter()
