@@ -361,9 +361,11 @@ impl<'a> Appended<'a> {
             .and_then(|v| v.parse().ok())
             .filter(|_| ok)
             .ok_or_else(|| bad(&format!("array {name} is not {comps} x {ty}, appended")))?;
-        let len = tuples
-            .checked_mul(comps * 8)
-            .ok_or_else(|| bad("NumberOfPoints out of range"))?;
+        let len = tuples.checked_mul(comps * 8).ok_or_else(|| {
+            bad(&format!(
+                "array {name}'s length ({tuples} tuples) out of range"
+            ))
+        })?;
         let (body, end) = off
             .checked_add(8)
             .and_then(|b| Some((b, b.checked_add(len)?)))
