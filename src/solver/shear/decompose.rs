@@ -1271,19 +1271,18 @@ impl<T: Transport> Stepper for BrickRun<'_, T> {
 /// The split of `s`'s box into `ranks` bricks ([`split_of`]: the plates' bases bound the gap,
 /// the ghost cut `2 r_max + skin`).
 pub fn split_for(ranks: usize, s: &ShearSim) -> Bricks {
-    split_of(
-        ranks,
-        s.box_.lx,
-        [s.bottom.base_y, s.top.base_y],
-        s.box_.lz,
-        s.ghost_cut(),
-    )
+    split_of(ranks, s.box_.lx, plate_span(s), s.box_.lz, s.ghost_cut())
 }
 
 /// `n` equal bricks (along x, across the gap, along z) of `s`'s box, the gap's slabs over
 /// the plates' bases: the split every rank makes of a run rank 0 chose `n` for.
 pub fn bricks_of(n: [usize; 3], s: &ShearSim) -> Bricks {
-    Bricks::equal(n, s.box_.lx, [s.bottom.base_y, s.top.base_y], s.box_.lz)
+    Bricks::equal(n, s.box_.lx, plate_span(s), s.box_.lz)
+}
+
+/// The span across the gap the bricks of `s` are made over: the plates' bases.
+fn plate_span(s: &ShearSim) -> [f64; 2] {
+    [s.bottom.base_y, s.top.base_y]
 }
 
 /// A chosen split `n` (the command line's `--bricks`, as LAMMPS' `processors`) of `s`'s box,
@@ -1582,8 +1581,7 @@ mod tests {
         speed: Option<f64>,
         steps: u64,
     ) -> (ShearSim, u64, Bricks) {
-        let ys = [global.bottom.base_y, global.top.base_y];
-        let bricks = &Bricks::equal(n, global.box_.lx, ys, global.box_.lz);
+        let bricks = &bricks_of(n, global);
         let ends: Vec<(Option<ShearSim>, u64, Bricks)> = std::thread::scope(|scope| {
             let runs: Vec<_> = InProcess::group(bricks.count())
                 .into_iter()
@@ -1677,8 +1675,8 @@ mod tests {
     #[test]
     fn a_particle_beyond_the_neighbouring_bricks_stops_every_brick() {
         let global = loose_ci_120();
-        let (lx, lz) = (global.box_.lx, global.box_.lz);
-        let bricks = Bricks::equal([4, 1, 1], lx, [global.bottom.base_y, global.top.base_y], lz);
+        let lx = global.box_.lx;
+        let bricks = bricks_of([4, 1, 1], &global);
         let cut = global.ghost_cut();
         assert_eq!(
             bricks.near(0, cut),
@@ -1855,8 +1853,7 @@ mod tests {
                     assert!(moved > 0, "{model}: {split:?}: no particle changed brick");
                 }
                 if slow > 1.0 {
-                    let ys = [fresh.bottom.base_y, fresh.top.base_y];
-                    let equal = Bricks::equal(split, bricks.lx, ys, bricks.lz);
+                    let equal = bricks_of(split, &fresh);
                     assert!(
                         bricks.volume_share(0) < 0.8 * equal.volume_share(0),
                         "{model}: {split:?}: brick 0 counting 3 times kept {:?}",

@@ -316,7 +316,6 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
             .zip(&gnl.hist)
             .map(|(p, h)| (gkey(p), (*p, *h)))
             .collect();
-        let ys = [base.bottom.base_y, base.top.base_y];
         for [nx, ny, nz] in [
             [2usize, 1, 1],
             [3, 1, 1],
@@ -326,8 +325,7 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
             [1, 3, 1],
             [2, 2, 1],
         ] {
-            let bricks =
-                super::super::bricks::Bricks::equal([nx, ny, nz], base.box_.lx, ys, base.box_.lz);
+            let bricks = super::super::decompose::bricks_of([nx, ny, nz], &base);
             let mut owned_total = 0;
             let mut crossing = 0;
             for b in 0..bricks.count() {
@@ -391,7 +389,6 @@ fn bricks_with_ghosts_give_each_owned_particle_the_bits_of_one_process() {
 /// same shares added in f64 brick by brick are not (what the exact sum is for).
 #[test]
 fn plate_forces_summed_exactly_over_bricks_are_one_process_bits() {
-    use super::super::bricks::Bricks;
     use super::super::exact::{self, PlateSum, LIMB_LEN};
     let mut s = sheared(RollingModel::EpsdImplicit, 1.0, 0.5);
     s.evaluate_forces().unwrap();
@@ -400,7 +397,6 @@ fn plate_forces_summed_exactly_over_bricks_are_one_process_bits() {
     let bits = |f: (V3, V3)| (f.0.map(f64::to_bits), f.1.map(f64::to_bits));
     let with_candidates = |q: usize| s.wall_start[q] != s.wall_start[q + 1];
     let mut f64_differs = 0;
-    let ys = [s.bottom.base_y, s.top.base_y];
     for n in [
         [1usize, 1, 1],
         [2, 1, 1],
@@ -410,7 +406,7 @@ fn plate_forces_summed_exactly_over_bricks_are_one_process_bits() {
         [1, 2, 1],
         [2, 2, 1],
     ] {
-        let bricks = Bricks::equal(n, s.box_.lx, ys, s.box_.lz);
+        let bricks = super::super::decompose::bricks_of(n, &s);
         let shares: Vec<Vec<(V3, V3)>> = (0..bricks.count())
             .map(|b| {
                 (0..s.x.len())
